@@ -1,0 +1,114 @@
+"""Planar geometrically exact (Simo-Reissner) beam as a port-Hamiltonian system.
+
+Seeds 001/002; Kinon, Betsch, Eugster, Multibody Syst. Dyn. (2025).
+
+State x = (r, phi, v, omega, Gamma, kappa) on s in [0, L]:
+centreline r in R^2, angle phi, velocities v = r', omega = phi' (in time),
+strains Gamma = A^T d_s r - e1 (axial, shear) and kappa = d_s phi as
+independent fields, with A(phi) = [[cos, -sin], [sin, cos]] = [d1 d2].
+
+    H(x) = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa) ds
+
+Local PH equations (N = dW/dGamma, M = dW/dkappa, n = A N, S = [[0, -1], [1, 0]]):
+
+    d_t r = v,                    d_t phi = omega
+    rhoA d_t v = d_s(A N) + f,    rhoI d_t omega = d_s M + (S d_s r).(A N) + m
+    d_t Gamma = A^T (d_s v - omega S d_s r),          d_t kappa = d_s omega
+
+Sign of S: with S = [[0, -1], [1, 0]] in *this* arrangement the model is
+objective; seed 002 writes omega A^T S d_s r with S = [[0, 1], [-1, 0]],
+which is the same.  (Flipping it still conserves energy but lets a rigidly
+spinning beam build up strain; tests/test_planar_beam.py catches that.)
+
+Weak form: (r, phi, v, omega) in P_k, (Gamma, kappa) in DG_{k-1}; the balance
+rows are integrated by parts (the end terms are the ports), the strain rows
+are tested with DG_{k-1}.  Testing with (v_m, omega_m, N, M) gives
+H_{n+1} - H_n = h y.u exactly.
+"""
+import ufl
+
+from rodfem.model import Field
+
+S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])
+E1 = ufl.as_vector([1.0, 0.0])
+
+
+def rotation(phi):
+    """A(phi) = [d1 d2]."""
+    c, s = ufl.cos(phi), ufl.sin(phi)
+    return ufl.as_matrix([[c, -s], [s, c]])
+
+
+def cross(a, b):
+    """Planar cross product a x b = a^T S^T b = a_0 b_1 - a_1 b_0."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
+# -- materials: W(Gamma, kappa) ------------------------------------------------
+
+def quadratic(EA, GA, EI, kappa0=0.0):
+    """W = 1/2 EA Gamma_1^2 + 1/2 GA Gamma_2^2 + 1/2 EI (kappa - kappa0)^2 (Hooke)."""
+    def W(Gamma, kappa):
+        return 0.5 * EA * Gamma[0] ** 2 + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
+    return W
+
+
+def log_axial(EA, GA, EI, kappa0=0.0):
+    """Hyperelastic in stretch lambda = 1 + Gamma_1:  W = EA (lambda - 1 - ln lambda) + ...
+
+    Same small-strain stiffness as `quadratic`, but W -> infinity as lambda -> 0
+    (no compression through zero length).  Non-quadratic: use the
+    discrete-gradient integrator for an exact energy balance.
+    """
+    def W(Gamma, kappa):
+        lam = 1.0 + Gamma[0]
+        return EA * (lam - 1.0 - ufl.ln(lam)) + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
+    return W
+
+
+# -- the model -------------------------------------------------------------------
+
+class PlanarBeam:
+    """Planar beam with line densities rhoA, rhoI and stored energy W(Gamma, kappa).
+
+    degree k: P_k kinematics and DG_{k-1} strains (k = 1 is the paper's element).
+    """
+    supports = {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]}
+    position = "r"
+    flows = {"force": "v", "moment": "omega"}
+
+    def __init__(self, rhoA, rhoI, energy, degree=1):
+        if degree < 1:
+            raise ValueError(f"degree must be >= 1 (got {degree})")
+        self.rhoA, self.rhoI, self.energy, self.degree = rhoA, rhoI, energy, degree
+        k = degree
+        self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
+                       Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
+        self.quadrature_degree = 2 * k + 2
+
+    def hamiltonian(self, x):
+        """1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa)."""
+        return (0.5 * self.rhoA * ufl.inner(x["v"], x["v"]) + 0.5 * self.rhoI * x["omega"] ** 2
+                + self.energy(x["Gamma"], x["kappa"]))
+
+    def residual(self, step, test, dx):
+        """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, omega_m, N, M)."""
+        dr, dphi, dv, dw, dG, dk = (test[n] for n in ("r", "phi", "v", "omega", "Gamma", "kappa"))
+        r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")
+        A = rotation(step.mid("phi"))
+        N, M = step.effort(self.energy, ["Gamma", "kappa"])
+        n = A * N
+        return (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
+                + self.rhoA * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
+                + self.rhoI * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
+                + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
+                + (step.rate("kappa") - w.dx(0)) * dk) * dx
+
+    def compatible_strains(self, x):
+        """Gamma = A^T d_s r - e1, kappa = d_s phi."""
+        return {"Gamma": rotation(x["phi"]).T * x["r"].dx(0) - E1, "kappa": x["phi"].dx(0)}
+
+    def momentum(self, x):
+        """Linear momentum p = rhoA v and angular momentum L_z = rhoA r x v + rhoI omega (densities)."""
+        return {"p_x": self.rhoA * x["v"][0], "p_y": self.rhoA * x["v"][1],
+                "L_z": self.rhoA * cross(x["r"], x["v"]) + self.rhoI * x["omega"]}

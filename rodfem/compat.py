@@ -1,0 +1,59 @@
+"""Everything that differs between DOLFINx versions, in one place.
+
+rodfem is developed on Debian 12's DOLFINx 0.5.2 (UFL 2022.2, ffcx 0.5,
+petsc4py 3.18).  The branches for newer versions (UFL >= 2023.2 with
+``basix.ufl`` elements, ``fem.functionspace``, ``u.x.petsc_vec``,
+``form_compiler_options``) follow the 0.9/0.10 sources and are detected by
+feature, never by version string.  No other module may test for versions.
+"""
+import inspect
+
+import ufl
+from dolfinx import fem
+from dolfinx import __version__ as dolfinx_version  # noqa: F401  (re-exported)
+
+LEGACY_UFL = hasattr(ufl, "FiniteElement")
+
+_FAMILY = {"P": "Lagrange", "DG": "DG"}
+
+
+def element(family, mesh, degree, shape=()):
+    """A scalar or vector element: family 'P' (continuous) or 'DG'."""
+    fam = _FAMILY.get(family, family)
+    if not LEGACY_UFL:  # pragma: no cover - DOLFINx >= 0.7
+        import basix.ufl
+        return basix.ufl.element(fam, mesh.basix_cell(), degree, shape=shape or None)
+    if not shape:
+        return ufl.FiniteElement(fam, mesh.ufl_cell(), degree)
+    return ufl.VectorElement(fam, mesh.ufl_cell(), degree, dim=shape[0])
+
+
+def mixed_element(elements):
+    if not LEGACY_UFL:  # pragma: no cover
+        import basix.ufl
+        return basix.ufl.mixed_element(elements)
+    return ufl.MixedElement(elements)
+
+
+def functionspace(mesh, el):
+    if hasattr(fem, "functionspace"):  # pragma: no cover
+        return fem.functionspace(mesh, el)
+    return fem.FunctionSpace(mesh, el)
+
+
+def petsc_vec(u):
+    """The PETSc vector behind a dolfinx Function."""
+    return u.x.petsc_vec if hasattr(u.x, "petsc_vec") else u.vector
+
+
+def form(f):
+    """Compile a UFL form (JIT-cached on disk, so a second run does not recompile)."""
+    return fem.form(f)
+
+
+def create_vector(compiled_form):
+    from dolfinx.fem import petsc
+    first = next(iter(inspect.signature(petsc.create_vector).parameters))
+    if first == "V":  # pragma: no cover - DOLFINx 0.10
+        return petsc.create_vector(compiled_form.function_spaces[0])
+    return petsc.create_vector(compiled_form)

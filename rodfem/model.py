@@ -1,0 +1,22 @@
+"""What rodfem asks of a model (the physics lives in forms/, never here).
+
+A model is any object with
+
+``fields``       list of `Field`: the state x = (x_1, ..., x_n)
+``supports``     dict kind -> field names fixed by that support, e.g.
+                 {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]}
+``position``     name of the centreline field (for tips and pictures)
+``quadrature_degree``   int, used for every cell integral of the model
+``hamiltonian(x)``      energy density: H = int_0^L hamiltonian(x) ds
+``residual(step, test, dx)``
+                 the weak form of E (x_{n+1} - x_n)/h - J(x_{n+1/2}) z = 0
+                 (no loads: the port layer adds B u), built from
+                 `step.rate`, `step.mid` and `step.effort`
+``compatible_strains(x)``
+                 dict strain-field -> UFL expression of the configuration,
+                 used to start the strains consistent with the initial shape
+``momentum(x)``  dict column -> density of momentum maps (p_x, ..., L_z),
+                 written for unsupported bodies; may be empty
+``flows``        dict load-kind -> flow field, e.g. {"force": "v", "moment": "omega"}
+"""
+from .spaces import Field  # noqa: F401

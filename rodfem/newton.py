@@ -1,0 +1,89 @@
+"""Newton's method for the step residual F(x_{n+1}) = 0 with a petsc4py SNES.
+
+Jacobian J = dF/dx_{n+1} from ufl.derivative; forms are compiled once and
+reused every step.  Direct LU: PETSc's own in serial (3x faster than MUMPS on
+these banded systems), MUMPS in parallel.  Every setting can be overridden
+from the PETSc options database with the prefix ``rodfem_`` (e.g.
+``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
+"""
+from dataclasses import dataclass
+
+from dolfinx.fem import petsc as fpetsc
+from petsc4py import PETSc
+
+from . import compat
+
+DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",
+            "snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_stol": 0.0, "snes_max_it": 25,
+            "ksp_type": "preonly", "pc_type": "lu"}
+
+
+class NewtonFailure(RuntimeError):
+    """Newton did not converge in a time step."""
+
+    def __init__(self, step, t, residual, iterations, reason):
+        self.step, self.t, self.residual, self.iterations, self.reason = step, t, residual, iterations, reason
+        super().__init__(f"Newton failed at step {step} (t = {t:.6g}): residual {residual:.3e} "
+                         f"after {iterations} iterations ({reason})")
+
+
+@dataclass
+class Solve:
+    iterations: int
+    residual: float
+
+
+_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+
+class Newton:
+    """Solves F(x) = 0 for the Function `x` (F, J compiled forms, bcs Dirichlet conditions)."""
+
+    def __init__(self, F, J, x, bcs, options=None, prefix="rodfem_"):
+        self.F, self.J, self.x, self.bcs = F, J, x, bcs
+        comm = x.function_space.mesh.comm
+        self.b = compat.create_vector(F)
+        self.A = fpetsc.create_matrix(J)
+        self.xv = compat.petsc_vec(x)
+        opts = PETSc.Options()
+        settings = dict(DEFAULTS)
+        settings["pc_factor_mat_solver_type"] = "petsc" if comm.size == 1 else "mumps"
+        settings.update(options or {})
+        for key, value in settings.items():
+            if not opts.hasName(prefix + key):
+                opts[prefix + key] = value
+        self.snes = PETSc.SNES().create(comm)
+        self.snes.setOptionsPrefix(prefix)
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
+        self.snes.setFromOptions()
+        self.snes.getKSP().setFromOptions()
+        self._work = self.xv.duplicate()
+
+    def _residual(self, snes, xin, b):
+        xin.copy(self.xv)
+        self.xv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.F)
+        fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.xv], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, self.bcs, self.xv, -1.0)
+
+    def _jacobian(self, snes, xin, A, P):
+        A.zeroEntries()
+        fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
+        A.assemble()
+
+    def solve(self, step, t):
+        """Solve in place for x; raise NewtonFailure (never return a NaN state)."""
+        self.xv.copy(self._work)
+        self.snes.solve(None, self._work)
+        reason = self.snes.getConvergedReason()
+        its = self.snes.getIterationNumber()
+        res = self.snes.getFunctionNorm()
+        if reason <= 0 or res != res:
+            raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
+        self._work.copy(self.xv)
+        self.xv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return Solve(its, res)

@@ -1,0 +1,100 @@
+"""The port layer: inputs u, conjugate outputs y = B^T z, and supports.
+
+A `Load` is an input u(t) paired with a flow field of the model (for a rod:
+force <-> velocity v, moment <-> angular velocity).  It enters the balance
+row of that field as
+
+    - (u(t_{n+1/2}), delta_flow)_Gamma          (Gamma = an end point or the whole rod)
+
+and its output is y = (flow_{n+1/2}) on Gamma, so that the work supplied in
+one step is h u.y = h (u, flow_{n+1/2})_Gamma, assembled with the same
+measure.  A scene adds only the loads it uses.
+
+A `Support` fixes fields at an end (Dirichlet rows): 'clamped' or 'pinned'
+name a set of fields given by the model.
+"""
+from dataclasses import dataclass, field
+from typing import Callable, Union
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+ENDS = {"left": 1, "right": 2}  # facet tags of s = 0 and s = L
+
+
+def constant_in_time(value, until=None):
+    """u(t) = value for t <= until (all t if until is None), zero after."""
+    value = np.asarray(value, dtype=float)
+
+    def u(t):
+        return value if until is None or t <= until else np.zeros_like(value)
+    return u
+
+
+def ramp(value, t_ramp):
+    """u(t) = value * min(t / t_ramp, 1)."""
+    value = np.asarray(value, dtype=float)
+    return lambda t: value * min(t / t_ramp, 1.0)
+
+
+@dataclass
+class Load:
+    """Input u(t) acting on the balance row of `flow` at `where` ('left', 'right' or 'domain').
+
+    `value` is an array (constant) or a callable t -> array; for 'domain' it is
+    a force/moment per unit length.  `name` labels the port in outputs.
+    """
+    flow: str
+    value: Union[Callable, np.ndarray, float]
+    where: str = "right"
+    name: str = ""
+    constant: fem.Constant = field(default=None, init=False, repr=False)
+
+    def __post_init__(self):
+        if self.where not in ("left", "right", "domain"):
+            raise ValueError(f"Load.where must be 'left', 'right' or 'domain' (got {self.where!r})")
+        if not callable(self.value):
+            self.value = constant_in_time(self.value)
+        self.name = self.name or f"{self.flow}@{self.where}"
+
+    def bind(self, mesh, shape):
+        u0 = np.asarray(self.value(0.0), dtype=float)
+        if u0.shape != tuple(shape):
+            raise ValueError(f"load {self.name}: value has shape {u0.shape}, field {self.flow!r} has {tuple(shape)}")
+        self.constant = fem.Constant(mesh, u0)
+
+    def measure(self, dx, ds):
+        return dx if self.where == "domain" else ds(ENDS[self.where])
+
+    def update(self, t):
+        self.constant.value = np.asarray(self.value(t), dtype=float)
+
+    def input_map(self, test, dx, ds):
+        """B u: the load's term in the residual, -(u, delta_flow)."""
+        return -ufl.inner(self.constant, test[self.flow]) * self.measure(dx, ds)
+
+    def power(self, step, dx, ds):
+        """y.u with y = flow_{n+1/2} on the port."""
+        return ufl.inner(self.constant, step.mid(self.flow)) * self.measure(dx, ds)
+
+
+@dataclass
+class Support:
+    """Fix the model's `kind` fields ('clamped', 'pinned', ...) at `end` to their initial values."""
+    end: str
+    kind: str = "clamped"
+
+    def __post_init__(self):
+        if self.end not in ENDS:
+            raise ValueError(f"Support.end must be 'left' or 'right' (got {self.end!r})")
+
+    def conditions(self, space, model, facets, state0):
+        names = model.supports.get(self.kind)
+        if names is None:
+            raise ValueError(f"support kind must be one of {sorted(model.supports)} (got {self.kind!r})")
+        bcs = []
+        for name in names:
+            dofs = fem.locate_dofs_topological(space.sub(name), 0, facets[self.end])
+            bcs.append(fem.dirichletbc(state0, dofs))
+        return bcs

@@ -1,0 +1,123 @@
+"""A scene made concrete: mesh, state space, step residual, ports and observables.
+
+Only what the scene uses is assembled: the loads it lists, the supports it
+lists, the tip only if an end is free, momentum maps only if nothing is
+supported.
+"""
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+
+from . import compat
+from .integrators import Step
+from .newton import Newton
+from .ports import ENDS
+from .spaces import StateSpace
+
+
+class Problem:
+    """The discrete PH system of `model` on [0, L] with `n_elements` cells.
+
+    initial: dict field -> callable x -> values (x[0] = s) or UFL expression;
+             strains not given are set from model.compatible_strains.
+    """
+
+    def __init__(self, model, length, n_elements, loads=(), supports=(), initial=None,
+                 integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None):
+        self.model, self.length, self.n_elements = model, float(length), int(n_elements)
+        self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
+        self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
+        self.comm = self.mesh.comm
+        self.space = S = StateSpace(self.mesh, model.fields)
+        self.x0, self.x1, self.state0 = (fem.Function(S.V) for _ in range(3))
+        self.h = fem.Constant(self.mesh, 1.0)
+
+        self._tag_ends()
+        self.dx = ufl.Measure("dx", domain=self.mesh, metadata={"quadrature_degree": model.quadrature_degree})
+        self.ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.end_tags)
+        self._set_initial(initial or {})
+
+        X0, X1 = S.split(self.x0), S.split(self.x1)
+        self.step = Step(X0, X1, self.h, integrator)
+        test = S.split(ufl.TestFunction(S.V))
+        for load in self.loads:
+            load.bind(self.mesh, S.field(load.flow).shape)
+        F = model.residual(self.step, test, self.dx)
+        for load in self.loads:
+            F += load.input_map(test, self.dx, self.ds)
+        self.F = compat.form(F)
+        self.J = compat.form(ufl.derivative(F, self.x1))
+        self.H = compat.form(model.hamiltonian(X1) * self.dx)
+        powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
+        self.work = compat.form(self.h * sum(powers[1:], powers[0])) if powers else None
+        self.observables = {k: compat.form(v) for k, v in self._observables(X1).items()}
+        bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]
+        self.newton = Newton(self.F, self.J, self.x1, bcs, options=newton_options)
+
+    # -- set-up -------------------------------------------------------------
+    def _tag_ends(self):
+        m = self.mesh
+        m.topology.create_connectivity(0, 1)
+        self.facets = {
+            "left": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], 0.0)),
+            "right": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], self.length)),
+        }
+        idx = np.concatenate([self.facets["left"], self.facets["right"]]).astype(np.int32)
+        vals = np.concatenate([np.full(len(self.facets["left"]), ENDS["left"]),
+                               np.full(len(self.facets["right"]), ENDS["right"])]).astype(np.int32)
+        order = np.argsort(idx)
+        self.end_tags = dmesh.meshtags(m, 0, idx[order], vals[order])
+
+    def _set_initial(self, initial):
+        S = self.space
+        unknown = set(initial) - set(S.names)
+        if unknown:
+            raise ValueError(f"initial values for unknown fields {sorted(unknown)}; fields are {S.names}")
+        for name, value in initial.items():
+            if not isinstance(value, ufl.core.expr.Expr):
+                S.assign(self.x0, name, value)
+        X0 = S.split(self.x0)
+        for name, value in initial.items():
+            if isinstance(value, ufl.core.expr.Expr):
+                S.assign(self.x0, name, value)
+        for name, expr in self.model.compatible_strains(X0).items():
+            if name not in initial:
+                S.assign(self.x0, name, expr)
+        self.x1.x.array[:] = self.x0.x.array
+        self.state0.x.array[:] = self.x0.x.array
+
+    def _observables(self, X):
+        obs = {}
+        supported = {sup.end for sup in self.supports}
+        pos = X[self.model.position]
+        if "right" not in supported:
+            for i, c in enumerate("xyz"[: pos.ufl_shape[0]]):
+                obs[f"tip_{c}"] = pos[i] * self.ds(ENDS["right"])
+        if not supported:
+            for name, density in self.model.momentum(X).items():
+                obs[name] = density * self.dx
+        return obs
+
+    # -- evaluation ---------------------------------------------------------
+    def assemble(self, compiled):
+        return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
+
+    def supplied_work(self):
+        """h y.u of the last step, with u at t_{n+1/2} and y = flow_{n+1/2}."""
+        return self.assemble(self.work) if self.work is not None else 0.0
+
+    def hamiltonian(self):
+        """H(x_{n+1})."""
+        return self.assemble(self.H)
+
+    def observe(self):
+        return {k: self.assemble(f) for k, f in self.observables.items()}
+
+    @property
+    def dofs(self):
+        im = self.space.V.dofmap.index_map
+        return im.size_global * self.space.V.dofmap.index_map_bs
+
+    def describe_elements(self):
+        return {f.name: f"{f.family}{f.degree}" + (f"^{f.shape[0]}" if f.shape else "") for f in self.space.fields}

@@ -1,0 +1,83 @@
+"""The state space: one mixed finite element space for x = (x_1, ..., x_n).
+
+A model lists its fields (name, family, degree, shape); `StateSpace` builds
+W_h = V_1 x ... x V_n on an interval mesh of [0, L] and hands out the UFL
+components of a state function by field name.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from . import compat
+
+
+@dataclass(frozen=True)
+class Field:
+    """One component x_i of the state: `family` 'P' (C0) or 'DG', `shape` () or (d,)."""
+    name: str
+    family: str
+    degree: int
+    shape: tuple = ()
+
+    @property
+    def size(self):
+        return int(np.prod(self.shape)) if self.shape else 1
+
+
+class StateSpace:
+    """W_h = V_1 x ... x V_n for the fields of a model."""
+
+    def __init__(self, mesh, fields):
+        self.mesh = mesh
+        self.fields = list(fields)
+        self.index = {f.name: i for i, f in enumerate(self.fields)}
+        els = [compat.element(f.family, mesh, f.degree, f.shape) for f in self.fields]
+        self.V = compat.functionspace(mesh, compat.mixed_element(els))
+        self._collapsed = {}
+
+    @property
+    def names(self):
+        return [f.name for f in self.fields]
+
+    def field(self, name):
+        return self.fields[self.index[name]]
+
+    def split(self, u):
+        """The UFL components of u (a Function on W_h or a TestFunction) by name."""
+        return dict(zip(self.names, ufl.split(u)))
+
+    def sub(self, name):
+        return self.V.sub(self.index[name])
+
+    def collapse(self, name):
+        """(V_i, dofs of V_i inside W_h), cached."""
+        if name not in self._collapsed:
+            self._collapsed[name] = self.sub(name).collapse()
+        return self._collapsed[name]
+
+    def assign(self, u, name, value):
+        """Set component `name` of u by interpolation of `value`.
+
+        `value` is a callable x -> array (x of shape (3, npoints), x[0] = s) or
+        a UFL expression (interpolated at the element's points).
+        """
+        Vi, dofs = self.collapse(name)
+        fi = fem.Function(Vi)
+        if isinstance(value, ufl.core.expr.Expr):
+            fi.interpolate(fem.Expression(value, Vi.element.interpolation_points()))
+        else:
+            fi.interpolate(value)
+        u.x.array[dofs] = fi.x.array
+        u.x.scatter_forward()
+
+    def nodal(self, u, name):
+        """Owned nodal values of component `name`: (s, values[npoints, size]), sorted by s."""
+        Vi, dofs = self.collapse(name)
+        bs = Vi.dofmap.index_map_bs
+        nloc = Vi.dofmap.index_map.size_local
+        s = Vi.tabulate_dof_coordinates()[:nloc, 0]
+        vals = u.x.array[dofs].reshape(-1, bs)[:nloc]
+        order = np.argsort(s)
+        return s[order], vals[order]
