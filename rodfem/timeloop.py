@@ -33,16 +33,16 @@ def steps_for(dt, t_end):
     return n
 
 
-def run(problem, dt, t_end, writer=None, progress=False):
+def run(problem, dt, t_end, writer=None, progress=False, result=None):
     """Integrate `problem` from t = 0 to t_end with step dt.
 
-    `writer` (optional) receives every row (`writer.record(t, row, problem)`);
-    on Newton failure the history written so far stays on disk and the
-    NewtonFailure propagates.
+    `writer` (optional) receives every row (`writer.record(row, problem)`);
+    on Newton failure the history written so far stays on disk (and in
+    `result`, if one was passed in) and the NewtonFailure propagates.
     """
     n_steps = steps_for(dt, t_end)
     problem.h.value = dt
-    res = Result()
+    res = result if result is not None else Result()
     H = problem.hamiltonian()
     row = {"t": 0.0, "H": H, "supplied": 0.0, "newton_its": 0, "balance_error": 0.0, **problem.observe()}
     res.rows.append(row)

@@ -1,0 +1,1 @@
+"""Literate demos; each module registers one scene (see pyproject.toml, entry points rodfem.scenes)."""

@@ -1,0 +1,101 @@
+"""Command line: ``rodfem list | show SCENE | run SCENE [--set NAME=VALUE ...] --out DIR``.
+
+Bad input ends with one line naming the parameter and what is allowed
+(exit code 2); a Newton failure with one line giving step, time and
+residual (exit code 3), keeping what was written.
+"""
+import argparse
+import sys
+
+from mpi4py import MPI
+
+from .newton import NewtonFailure
+from .scene import ParameterError, load, scenes
+
+comm = MPI.COMM_WORLD
+
+
+def say(*args, file=sys.stdout):
+    if comm.rank == 0:
+        print(*args, file=file, flush=True)
+
+
+def parse_sets(pairs):
+    overrides = {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")
+        name, value = pair.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    return overrides
+
+
+def cmd_list(args):
+    for name, ep in scenes().items():
+        say(f"{name:24s} {ep.load().description}")
+
+
+def cmd_show(args):
+    scene = load(args.scene)
+    say(f"{scene.name}: {scene.description}")
+    if scene.notes:
+        say(scene.notes)
+    say(f"\n{'parameter':14s} {'default':>12s}  {'unit':8s} allowed / meaning")
+    for p in scene.parameters:
+        say(f"{p.name:14s} {str(p.default):>12s}  {p.unit:8s} {p.allowed()}: {p.doc}")
+
+
+def cmd_run(args):
+    from .driver import default_out, run_scene
+    out = args.out or default_out(args.scene)
+    result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet)
+    say(f"{summary['scene']}: {summary['steps']} steps in {summary['wall_time_s']:.2f} s "
+        f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
+        f"max |H_n+1 - H_n - h y.u| = {summary['max_balance_error']:.2e} "
+        f"({summary['max_balance_error_relative']:.1e} of max |H|)")
+    say(f"results in {out}/: history.csv, summary.json, centreline.pvd (ParaView), shapes.png, energy.png")
+
+
+def cmd_study(args):
+    from .study import run_study
+    run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
+
+
+def parser():
+    ap = argparse.ArgumentParser(prog="rodfem", description="Port-Hamiltonian rods, beams and strings in FEniCSx.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the scenes").set_defaults(func=cmd_list)
+    sp = sub.add_parser("show", help="parameters of a scene")
+    sp.add_argument("scene")
+    sp.set_defaults(func=cmd_show)
+    rp = sub.add_parser("run", help="run a scene")
+    rp.add_argument("scene")
+    rp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    rp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE)")
+    rp.add_argument("--quiet", action="store_true", help="no progress bar")
+    rp.set_defaults(func=cmd_run)
+    st = sub.add_parser("study", help="error against run time over a sweep of dt and n_elements")
+    st.add_argument("scene")
+    st.add_argument("--set", action="append", metavar="NAME=VALUE")
+    st.add_argument("--out", metavar="DIR")
+    st.add_argument("--dt", type=float, nargs="+", help="time steps of the sweep")
+    st.add_argument("--elements", type=int, nargs="+", help="element counts of the sweep")
+    st.set_defaults(func=cmd_study)
+    return ap
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    try:
+        args.func(args)
+    except ParameterError as e:
+        say(f"rodfem: error: {e}", file=sys.stderr)
+        return 2
+    except NewtonFailure as e:
+        say(f"rodfem: {e}; results so far kept", file=sys.stderr)
+        return 3
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
