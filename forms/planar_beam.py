@@ -86,12 +86,12 @@ class PlanarBeam:
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
         self.quadrature_degree = 2 * k + 2
 
-    def hamiltonian(self, x):
-        """1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa)."""
+    def hamiltonian(self, x, dx, ds):
+        """H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa) ds."""
         return (0.5 * self.rhoA * ufl.inner(x["v"], x["v"]) + 0.5 * self.rhoI * x["omega"] ** 2
-                + self.energy(x["Gamma"], x["kappa"]))
+                + self.energy(x["Gamma"], x["kappa"])) * dx
 
-    def residual(self, step, test, dx):
+    def residual(self, step, test, dx, ds):
         """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, omega_m, N, M)."""
         dr, dphi, dv, dw, dG, dk = (test[n] for n in ("r", "phi", "v", "omega", "Gamma", "kappa"))
         r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")

@@ -4,11 +4,13 @@ A model is any object with
 
 ``fields``       list of `Field`: the state x = (x_1, ..., x_n)
 ``supports``     dict kind -> field names fixed by that support, e.g.
-                 {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]}
+                 {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]};
+                 "r.1" fixes only component 1 of r
 ``position``     name of the centreline field (for tips and pictures)
 ``quadrature_degree``   int, used for every cell integral of the model
-``hamiltonian(x)``      energy density: H = int_0^L hamiltonian(x) ds
-``residual(step, test, dx)``
+``hamiltonian(x, dx, ds)``   the Hamiltonian H(x) as a UFL form (ds(1), ds(2): the
+                 ends s = 0, L, for lumped energies such as end masses)
+``residual(step, test, dx, ds)``
                  the weak form of E (x_{n+1} - x_n)/h - J(x_{n+1/2}) z = 0
                  (no loads: the port layer adds B u), built from
                  `step.rate`, `step.mid` and `step.effort`

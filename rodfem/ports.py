@@ -2,19 +2,21 @@
 
 A `Load` is an input u(t) paired with a flow field of the model (for a rod:
 force <-> velocity v, moment <-> angular velocity).  It enters the balance
-row of that field as
+rows as
 
-    - (u(t_{n+1/2}), delta_flow)_Gamma          (Gamma = an end point or the whole rod)
+    - <u(t_{n+1/2}), B(x_{n+1/2})^T delta_x>_Gamma   (Gamma = an end point or the whole rod)
 
-and its output is y = (flow_{n+1/2}) on Gamma, so that the work supplied in
-one step is h u.y = h (u, flow_{n+1/2})_Gamma, assembled with the same
-measure.  A scene adds only the loads it uses.
+and its output is y = B(x_{n+1/2})^T z, so that the work supplied in one
+step is h u.y, assembled with the same measure.  By default B^T picks the
+flow field (<u, B^T w> = u . w[flow]); a `pairing(u, xm, w)` gives any other
+(state-dependent) input map, e.g. a moment acting on director velocities.
+A scene adds only the loads it uses.
 
 A `Support` fixes fields at an end (Dirichlet rows): 'clamped' or 'pinned'
 name a set of fields given by the model.
 """
 from dataclasses import dataclass, field
-from typing import Callable, Union
+from typing import Callable, Optional, Union
 
 import numpy as np
 import ufl
@@ -44,11 +46,14 @@ class Load:
 
     `value` is an array (constant) or a callable t -> array; for 'domain' it is
     a force/moment per unit length.  `name` labels the port in outputs.
+    `pairing(u, xm, w)` (optional): the density <u, B(xm)^T w>, with xm the
+    midpoint fields and w either test functions or midpoint flows (dicts by name).
     """
     flow: str
     value: Union[Callable, np.ndarray, float]
     where: str = "right"
     name: str = ""
+    pairing: Optional[Callable] = None
     constant: fem.Constant = field(default=None, init=False, repr=False)
 
     def __post_init__(self):
@@ -58,11 +63,18 @@ class Load:
             self.value = constant_in_time(self.value)
         self.name = self.name or f"{self.flow}@{self.where}"
 
-    def bind(self, mesh, shape):
+    def bind(self, mesh, space):
         u0 = np.asarray(self.value(0.0), dtype=float)
-        if u0.shape != tuple(shape):
-            raise ValueError(f"load {self.name}: value has shape {u0.shape}, field {self.flow!r} has {tuple(shape)}")
+        if self.pairing is None:
+            shape = space.field(self.flow).shape
+            if u0.shape != tuple(shape):
+                raise ValueError(f"load {self.name}: value has shape {u0.shape}, field {self.flow!r} has {tuple(shape)}")
         self.constant = fem.Constant(mesh, u0)
+
+    def _pair(self, step, w):
+        if self.pairing is None:
+            return ufl.inner(self.constant, w[self.flow])
+        return self.pairing(self.constant, {n: step.mid(n) for n in step.x0}, w)
 
     def measure(self, dx, ds):
         return dx if self.where == "domain" else ds(ENDS[self.where])
@@ -70,13 +82,13 @@ class Load:
     def update(self, t):
         self.constant.value = np.asarray(self.value(t), dtype=float)
 
-    def input_map(self, test, dx, ds):
-        """B u: the load's term in the residual, -(u, delta_flow)."""
-        return -ufl.inner(self.constant, test[self.flow]) * self.measure(dx, ds)
+    def input_map(self, step, test, dx, ds):
+        """B u: the load's term in the residual, -<u, B^T delta_x>."""
+        return -self._pair(step, test) * self.measure(dx, ds)
 
     def power(self, step, dx, ds):
-        """y.u with y = flow_{n+1/2} on the port."""
-        return ufl.inner(self.constant, step.mid(self.flow)) * self.measure(dx, ds)
+        """y.u = <u, B^T z> with the midpoint flows z on the port."""
+        return self._pair(step, {n: step.mid(n) for n in step.x0}) * self.measure(dx, ds)
 
 
 @dataclass
@@ -95,6 +107,8 @@ class Support:
             raise ValueError(f"support kind must be one of {sorted(model.supports)} (got {self.kind!r})")
         bcs = []
         for name in names:
-            dofs = fem.locate_dofs_topological(space.sub(name), 0, facets[self.end])
+            base, _, comp = name.partition(".")
+            sub = space.sub(base) if not comp else space.sub(base).sub(int(comp))
+            dofs = fem.locate_dofs_topological(sub, 0, facets[self.end])
             bcs.append(fem.dirichletbc(state0, dofs))
         return bcs

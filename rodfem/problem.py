@@ -42,13 +42,13 @@ class Problem:
         self.step = Step(X0, X1, self.h, integrator)
         test = S.split(ufl.TestFunction(S.V))
         for load in self.loads:
-            load.bind(self.mesh, S.field(load.flow).shape)
-        F = model.residual(self.step, test, self.dx)
+            load.bind(self.mesh, S)
+        F = model.residual(self.step, test, self.dx, self.ds)
         for load in self.loads:
-            F += load.input_map(test, self.dx, self.ds)
+            F += load.input_map(self.step, test, self.dx, self.ds)
         self.F = compat.form(F)
         self.J = compat.form(ufl.derivative(F, self.x1))
-        self.H = compat.form(model.hamiltonian(X1) * self.dx)
+        self.H = compat.form(model.hamiltonian(X1, self.dx, self.ds))
         powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
         self.work = compat.form(self.h * sum(powers[1:], powers[0])) if powers else None
         self.observables = {k: compat.form(v) for k, v in self._observables(X1).items()}
