@@ -2,7 +2,10 @@
 
 Jacobian J = dF/dx_{n+1} from ufl.derivative; forms are compiled once and
 reused every step.  Direct LU: PETSc's own in serial (3x faster than MUMPS on
-these banded systems), MUMPS in parallel.  Every setting can be overridden
+these banded systems), MUMPS in parallel.  PETSc's LU does not pivot, so a
+zero pivot (saddle points: multipliers, zero densities in statics) makes it
+fail; the solver then switches to MUMPS once for the rest of the run and
+repeats the step (`Newton.linear_solver` tells which one ran).  Every setting can be overridden
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
 """
@@ -75,11 +78,20 @@ class Newton:
         fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
         A.assemble()
 
+    @property
+    def linear_solver(self):
+        return self.snes.getKSP().getPC().getFactorSolverType()
+
     def solve(self, step, t):
         """Solve in place for x; raise NewtonFailure (never return a NaN state)."""
         self.xv.copy(self._work)
         self.snes.solve(None, self._work)
         reason = self.snes.getConvergedReason()
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
+            pc = self.snes.getKSP().getPC()
+            pc.reset()
+            pc.setFactorSolverType("mumps")
+            return self.solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
         if reason <= 0 or res != res:

@@ -105,7 +105,7 @@ def summarize(scene_name, params, problem, result, status="completed", failure=N
         "scene": scene_name, "status": status, "failure": failure, "parameters": params,
         "dolfinx_version": compat.dolfinx_version, "integrator": problem.integrator,
         "elements": problem.describe_elements(), "n_elements": problem.n_elements, "dofs": problem.dofs,
-        "mpi_ranks": problem.comm.size, "steps": result.steps, "wall_time_s": result.wall_time,
+        "mpi_ranks": problem.comm.size, "linear_solver": problem.newton.linear_solver, "steps": result.steps, "wall_time_s": result.wall_time,
         "time_per_step_ms": 1e3 * result.wall_time / max(result.steps, 1),
         "newton_its_mean": float(its.mean()), "newton_its_max": int(its.max()),
         "max_balance_error": result.max_balance_error,
