@@ -1,0 +1,217 @@
+"""3D Cosserat rod with directors as a port-Hamiltonian system (mixed, compliance form).
+
+Seed 000; Kinon, Eugster, Betsch, CMA 458 (2026) 118966 (arXiv 2512.19408).
+
+Configuration q = (phi, d1, d2, d3) in R^12 (phi: centreline, field "r"),
+R(d) = [d1 d2 d3]; d1 is the axis (tangent of the stress-free straight rod),
+d2, d3 span the cross-section (the convention of the helix data of Harsch et
+al. 2021).  Independent velocities v = (v_phi, v_d) = (v, w1, w2, w3),
+stress resultants N (N1 axial, N2, N3 shear) and M (M1 torsion, M2, M3
+bending), multipliers lambda (6) of the orthonormality constraints.
+
+Objective strain measures, bilinear in the directors and their derivatives
+(' = d/ds), equal to R^T phi' - e1 and axial(R^T R') when R^T R = I:
+
+    Gamma_i = d_i . phi' - delta_i1
+    K_i     = 1/2 eps_ijk d_j' . d_k      (K1 = 1/2 (d2'.d3 - d3'.d2), ...)
+
+Their rates give the operators of the paper (v_d = (w1, w2, w3)):
+
+    d_t Gamma = R^T v' + J_N^T v_d,         (J_N^T v_d)_i = phi' . w_i
+    d_t K     = J_K v_d,                    (J_K v_d)_i  = 1/2 eps_ijk (w_j'.d_k + d_j'.w_k)
+
+Hamiltonian (quadratic, constant mass matrix):
+
+    H = int 1/2 rhoA |v|^2 + 1/2 sum_i m_i |w_i|^2 + 1/2 N.C_N N + 1/2 M.C_M M ds
+
+The director masses m_i reproduce the rotary inertia (rhoJ_1, rhoJ_2, rhoJ_3)
+about (d1, d2, d3): with d_i' = omega x d_i, sum m_i |w_i|^2 = sum_k (m - m_k)
+omega_k^2 (m = sum m_i), so m_k = (rhoJ_1 + rhoJ_2 + rhoJ_3)/2 - rhoJ_k, all
+>= 0 by the triangle inequality of an inertia tensor.  A thin cross-section
+(rhoJ_1 = rhoJ_2 + rhoJ_3) has m_1 = 0: the axis director is massless, w1 is
+fixed by the constraints and its row fixes lambda_11, lambda_12, lambda_13
+(the Newton matrix stays regular).
+
+Local PH equations (balance of momentum, orthonormality on velocity level,
+compliance equations in rate form):
+
+    rhoA d_t v = d_s(R N) + f
+    M_rho d_t v_d = -J_N N - J_M M - G_d^T lambda + B_m m,   (J_M = J_K^*, the formal adjoint)
+    0 = G_d v_d,           (G_d v_d)_ij = d_i . w_j + d_j . w_i   (i <= j)
+    C_N d_t N = R^T d_s v + J_N^T v_d,     C_M d_t M = J_K v_d
+    d_t q = v
+
+with diagonal compliances C_N = diag(1/EA, 1/GA_2, 1/GA_3), C_M =
+diag(1/GJ, 1/EI_2, 1/EI_3).  An entry may be ZERO: its row becomes the
+constraint d_t Gamma_i = 0 (inextensible, shear-rigid) or d_t K_i = 0, and
+N_i (M_i) its multiplier.  N, M start at zero in the stress-free reference
+configuration, which may be curved: the rate form never needs the reference
+strains Gamma^0, K^0.
+
+Discretization (seed 000): q, v in P2, N, M in DG1, lambda in P2 collocated
+at the nodes: the constraint rows AND the reaction forces use the 3-point
+Gauss-Lobatto rule whose points are the P2 nodes (dolfinx-notes.md §3), so
+g(d_m, w_m) = 0 holds node by node.  Midpoint rule, everything at x_{n+1/2}
+(lambda at t_{n+1}).  Testing with (v_m, w_m, N_m, M_m, lambda) gives
+
+    H_{n+1} - H_n = h y.u          (exactly: H quadratic, J skew)
+
+and, because d_i.d_j is bilinear and d_{n+1} - d_n = h w_m at the nodes,
+
+    (d_i.d_j)_{n+1} - (d_i.d_j)_n = h g_ij(d_m, w_m) = 0     at every node,
+
+so orthonormality holds at the nodes for all time.  The strains stay
+compatible: C_N N_n - Pi(Gamma(q_n)) and C_M M_n - Pi(K(q_n)) (Pi: L2
+projection on DG1) are constant in time, since Gamma, K are bilinear.
+Objectivity: every term is built from dot products of (d, phi', w, v'), so
+the scheme is invariant under superposed rotations and the total angular
+momentum L = int rhoA phi x v + sum_i m_i d_i x w_i ds is conserved when no
+load acts.
+
+Ports: a spatial moment m acts on the directors through
+<m, 1/2 sum_i d_i x w_i> (= m . omega, see `spatial_moment`); a body-fixed
+moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
+"""
+import numpy as np
+import ufl
+
+from rodfem.model import Field
+
+DIRECTORS = ("d1", "d2", "d3")
+RATES = ("w1", "w2", "w3")
+# index pairs (i, j), i <= j, of the 6 orthonormality constraints g_ij = d_i . d_j - delta_ij
+PAIRS = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+EPS = ((0, 1, 2), (1, 2, 0), (2, 0, 1))   # cyclic (i, j, k): K_i = 1/2 (d_j'.d_k - d_k'.d_j)
+
+
+def gll(dx):
+    """The 3-point Gauss-Lobatto measure on the mesh of `dx`: points = the P2 nodes."""
+    return ufl.Measure("dx", domain=dx.ufl_domain(),
+                       metadata={"quadrature_rule": "GLL", "quadrature_degree": 2})
+
+
+def frame(d):
+    """R = [d1 d2 d3] (columns)."""
+    return ufl.as_matrix([[d[j][i] for j in range(3)] for i in range(3)])
+
+
+def curvature(d):
+    """K_i = 1/2 eps_ijk d_j' . d_k (objective; = axial(R^T R') for R in SO(3))."""
+    return ufl.as_vector([0.5 * (ufl.inner(d[j].dx(0), d[k]) - ufl.inner(d[k].dx(0), d[j])) for i, j, k in EPS])
+
+
+def curvature_rate(d, w):
+    """J_K w: the derivative of K(d) in the direction w (bilinear in (d, w))."""
+    return ufl.as_vector([0.5 * (ufl.inner(w[j].dx(0), d[k]) + ufl.inner(d[j].dx(0), w[k])
+                                 - ufl.inner(w[k].dx(0), d[j]) - ufl.inner(d[k].dx(0), w[j])) for i, j, k in EPS])
+
+
+def shear_strain(r, d):
+    """Gamma_i + delta_i1 = d_i . phi'."""
+    return ufl.as_vector([ufl.inner(d[i], r.dx(0)) for i in range(3)])
+
+
+def constraint_rate(d, w):
+    """G_d w: g_ij = d_i . w_j + d_j . w_i for the 6 pairs i <= j."""
+    return ufl.as_vector([ufl.inner(d[i], w[j]) + ufl.inner(d[j], w[i]) for i, j in PAIRS])
+
+
+def angular_velocity(d, w):
+    """omega = 1/2 sum_i d_i x w_i (= omega if w_i = omega x d_i, d orthonormal)."""
+    return 0.5 * sum((ufl.cross(d[i], w[i]) for i in range(3)), ufl.zero(3))
+
+
+def spatial_moment(u, xm, w):
+    """Pairing <m, B(x)^T w> = m . 1/2 sum_i d_i x w_i of a spatial moment m (use with Load(pairing=))."""
+    d = [xm[n] for n in DIRECTORS]
+    return ufl.inner(u, angular_velocity(d, [w[n] for n in RATES]))
+
+
+def body_moment(u, xm, w):
+    """Pairing of a body-fixed moment M_B: the spatial moment m = sum_i M_B,i d_i (midpoint directors)."""
+    d = [xm[n] for n in DIRECTORS]
+    m = sum((u[i] * d[i] for i in range(3)), ufl.zero(3))
+    return ufl.inner(m, angular_velocity(d, [w[n] for n in RATES]))
+
+
+def director_masses(rhoJ):
+    """m_k = (rhoJ_1 + rhoJ_2 + rhoJ_3)/2 - rhoJ_k, the director masses of the rotary inertia rhoJ."""
+    J = np.asarray(rhoJ, dtype=float)
+    m = 0.5 * J.sum() - J
+    if np.any(m < -1e-14 * max(J.max(), 1.0)):
+        raise ValueError(f"rotary inertia {tuple(J)} violates the triangle inequality rhoJ_k <= sum of the others")
+    return np.maximum(m, 0.0)
+
+
+def compliances(EA, GA2, GA3, GJ, EI2, EI3):
+    """C_N = (1/EA, 1/GA2, 1/GA3), C_M = (1/GJ, 1/EI2, 1/EI3); an infinite stiffness gives 0."""
+    inv = [0.0 if np.isinf(k) else 1.0 / k for k in (EA, GA2, GA3, GJ, EI2, EI3)]
+    return tuple(inv[:3]), tuple(inv[3:])
+
+
+class CosseratRod:
+    """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
+    about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0).
+    """
+    supports = {"clamped": ["r", *DIRECTORS, "v", *RATES, "lam"], "pinned": ["r", "v"]}
+    position = "r"
+    flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
+    quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
+
+    def __init__(self, rhoA, rhoJ, C_N, C_M):
+        self.rhoA = float(rhoA)
+        self.masses = director_masses(rhoJ)
+        self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))
+        if self.C_N.shape != (3,) or self.C_M.shape != (3,) or np.any(self.C_N < 0) or np.any(self.C_M < 0):
+            raise ValueError("compliances C_N, C_M must be three numbers >= 0 each")
+        v3 = (3,)
+        self.fields = ([Field(n, "P", 2, v3) for n in ("r", *DIRECTORS, "v", *RATES)]
+                       + [Field("N", "DG", 1, v3), Field("M", "DG", 1, v3), Field("lam", "P", 2, (6,))])
+
+    def _diag(self, c):
+        return ufl.as_matrix([[float(c[i]) if i == j else 0.0 for j in range(3)] for i in range(3)])
+
+    def hamiltonian(self, x, dx, ds):
+        """H = int 1/2 rhoA |v|^2 + 1/2 sum m_i |w_i|^2 + 1/2 N.C_N N + 1/2 M.C_M M ds."""
+        kin = 0.5 * self.rhoA * ufl.inner(x["v"], x["v"])
+        kin += sum(0.5 * float(m) * ufl.inner(x[n], x[n]) for m, n in zip(self.masses, RATES))
+        pot = 0.5 * ufl.inner(x["N"], self._diag(self.C_N) * x["N"]) + 0.5 * ufl.inner(x["M"], self._diag(self.C_M) * x["M"])
+        return (kin + pot) * dx
+
+    def residual(self, step, test, dx, ds):
+        """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, w_m, N_m, M_m, lambda_{n+1})."""
+        dxG = gll(dx)
+        r, v = step.mid("r"), step.mid("v")
+        d = [step.mid(n) for n in DIRECTORS]
+        w = [step.mid(n) for n in RATES]
+        N, M, lam = step.mid("N"), step.mid("M"), step.x1["lam"]
+        dv, dN, dM, dlam = test["v"], test["N"], test["M"], test["lam"]
+        dw = [test[n] for n in RATES]
+        # kinematics d_t q = v (nodal: lumped on the GLL rule)
+        F = sum(ufl.inner(step.rate(q) - step.mid(p), test[q])
+                for q, p in zip(("r", *DIRECTORS), ("v", *RATES))) * dxG
+        # balance of linear momentum: rhoA d_t v = d_s(R N)
+        F += (self.rhoA * ufl.inner(step.rate("v"), dv) + ufl.inner(frame(d) * N, dv.dx(0))) * dx
+        # director momentum: M_rho d_t v_d = -J_N N - J_M M - G_d^T lambda
+        F += sum(float(m) * ufl.inner(step.rate(n), dwi) + N[i] * ufl.inner(r.dx(0), dwi)
+                 for i, (m, n, dwi) in enumerate(zip(self.masses, RATES, dw))) * dx
+        F += ufl.inner(M, curvature_rate(d, dw)) * dx
+        F += ufl.inner(lam, constraint_rate(d, dw)) * dxG
+        # orthonormality on velocity level, collocated at the nodes
+        F += ufl.inner(constraint_rate(d, w), dlam) * dxG
+        # compliance equations in rate form
+        gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
+        F += (ufl.inner(self._diag(self.C_N) * step.rate("N") - gamma_rate, dN)
+              + ufl.inner(self._diag(self.C_M) * step.rate("M") - curvature_rate(d, w), dM)) * dx
+        return F
+
+    def compatible_strains(self, x):
+        """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""
+        return {}
+
+    def momentum(self, x):
+        """p = rhoA v and L = rhoA phi x v + sum_i m_i d_i x w_i (densities; L about the origin)."""
+        p = self.rhoA * x["v"]
+        L = ufl.cross(x["r"], p) + sum((float(m) * ufl.cross(x[dn], x[wn])
+                                       for m, dn, wn in zip(self.masses, DIRECTORS, RATES)), ufl.zero(3))
+        return {**{f"p_{c}": p[i] for i, c in enumerate("xyz")}, **{f"L_{c}": L[i] for i, c in enumerate("xyz")}}
