@@ -15,9 +15,9 @@ from .scene import ParameterError, load, scenes
 comm = MPI.COMM_WORLD
 
 
-def say(*args, file=sys.stdout):
+def say(*args, file=None):
     if comm.rank == 0:
-        print(*args, file=file, flush=True)
+        print(*args, file=file or sys.stdout, flush=True)
 
 
 def parse_sets(pairs):

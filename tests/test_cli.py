@@ -1,0 +1,104 @@
+"""The command line contract: list/show/run, output files, bad input, Newton failure, MPI."""
+import csv
+import json
+import os
+
+import numpy as np
+import pytest
+
+from rodfem.cli import main
+
+
+def read_history(path):
+    with open(os.path.join(path, "history.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def test_list_and_show(capsys):
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in ("flying-spaghetti-2d", "roll-up-2d", "cantilever-2d"):
+        assert name in out
+    assert main(["show", "cantilever-2d"]) == 0
+    out = capsys.readouterr().out
+    for name in ("n_elements", "dt", "t_end", "integrator", "EA", "GA", "EI", "rhoA", "rhoI", "g", "fx", "fy", "t_load"):
+        assert f"\n{name} " in out
+
+
+def test_run_writes_results(tmp_path):
+    out = tmp_path / "fs"
+    assert main(["run", "flying-spaghetti-2d", "--set", "t_end=3", "--quiet", "--out", str(out)]) == 0
+    h = read_history(out)
+    for col in ("t", "H", "supplied", "newton_its", "tip_x", "tip_y", "p_x", "p_y", "L_z"):
+        assert col in h
+    assert len(h["t"]) == 31 and h["t"][0] == 0.0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["parameters"]["t_end"] == 3.0 and s["parameters"]["EA"] == 1e4
+    assert s["steps"] == 30 and s["dofs"] == 11 * 6 + 10 * 3
+    assert s["dolfinx_version"].startswith("0.")
+    assert s["max_balance_error_relative"] <= 1e-9
+    assert (out / "centreline.pvd").exists() and len(list((out / "centreline").glob("*.vtu"))) == 31
+    assert (out / "shapes.png").stat().st_size > 1000 and (out / "energy.png").stat().st_size > 1000
+
+
+def test_clamped_scene_has_no_momentum_columns(tmp_path):
+    assert main(["run", "roll-up-2d", "--set", "dt=0.1", "--quiet", "--out", str(tmp_path)]) == 0
+    h = read_history(tmp_path)
+    assert "tip_x" in h and "p_x" not in h and "L_z" not in h
+
+
+@pytest.mark.parametrize("args, words", [
+    (["run", "no-such-scene"], ["unknown scene", "flying-spaghetti-2d"]),
+    (["show", "no-such-scene"], ["unknown scene"]),
+    (["run", "roll-up-2d", "--set", "nope=1"], ["unknown parameter 'nope'", "n_elements"]),
+    (["run", "roll-up-2d", "--set", "dt=abc"], ["'dt'", "a number > 0"]),
+    (["run", "roll-up-2d", "--set", "dt=0"], ["'dt'", "> 0"]),
+    (["run", "roll-up-2d", "--set", "dt=-1"], ["'dt'", "> 0"]),
+    (["run", "roll-up-2d", "--set", "n_elements=0"], ["'n_elements'", "integer >= 1"]),
+    (["run", "roll-up-2d", "--set", "n_elements=2.5"], ["'n_elements'", "integer"]),
+    (["run", "roll-up-2d", "--set", "EI=-5"], ["'EI'", "> 0"]),
+    (["run", "cantilever-2d", "--set", "rhoA=-1"], ["'rhoA'", ">= 0"]),
+    (["run", "roll-up-2d", "--set", "integrator=euler"], ["'integrator'", "midpoint, discrete-gradient"]),
+    (["run", "roll-up-2d", "--set", "dt=0.3"], ["'dt'", "whole number of steps"]),
+    (["run", "roll-up-2d", "--set", "EA=nan"], ["'EA'"]),
+])
+def test_bad_input_is_one_line(args, words, capsys, tmp_path):
+    assert main(args + ["--quiet", "--out", str(tmp_path / "x")] if args[0] == "run" else args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("rodfem: error:")
+    for w in words:
+        assert w in err
+
+
+def test_bad_input_from_the_shell_has_no_traceback(rodfem, tmp_path):
+    p = rodfem("run", "cantilever-2d", "--set", "EA=-1", "--out", str(tmp_path))
+    assert p.returncode == 2
+    assert p.stderr.strip().splitlines() == ["rodfem: error: parameter 'EA' must be a number > 0 (got -1)"]
+
+
+def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
+    out = tmp_path / "fail"
+    p = rodfem("run", "flying-spaghetti-2d", "--set", "t_end=1", "--quiet", "--out", str(out),
+               env={"PETSC_OPTIONS": "-rodfem_snes_max_it 1"})
+    assert p.returncode == 3
+    last = p.stderr.strip().splitlines()[-1]
+    assert "Newton failed at step 1" in last and "residual" in last and "Traceback" not in p.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "newton-failure" and s["failure"]["step"] == 1
+    assert len(read_history(out)["t"]) == 1  # the t = 0 row written before the failure
+
+
+@pytest.mark.mpi
+def test_mpi_two_ranks_match_serial(rodfem, tmp_path):
+    args = ["run", "flying-spaghetti-2d", "--set", "n_elements=20", "--set", "t_end=5", "--quiet"]
+    serial, par = tmp_path / "np1", tmp_path / "np2"
+    assert rodfem(*args, "--out", str(serial)).returncode == 0
+    p = rodfem(*args, "--out", str(par), np=2)
+    assert p.returncode == 0, p.stderr[-2000:]
+    a, b = read_history(serial), read_history(par)
+    assert json.loads((par / "summary.json").read_text())["mpi_ranks"] == 2
+    for col in ("H", "supplied", "tip_x", "tip_y", "p_x", "p_y", "L_z"):
+        scale = max(np.max(np.abs(a[col])), 1.0)
+        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
+    assert np.array_equal(a["newton_its"], b["newton_its"])
