@@ -56,7 +56,14 @@ def build(p, comm):
 
 
 def reference(p):
-    """Euler-Bernoulli + shear static tip deflection under fy (linear theory)."""
+    """Euler-Bernoulli + shear static tip deflection under fy (linear theory).
+
+    Only for the static set-up (rhoA = rhoI = 0, no gravity, fx = 0, the load
+    still on at t_end); None otherwise, so that `rodfem study` uses a refined run.
+    """
+    static = p["rhoA"] == 0 and p["rhoI"] == 0 and p["g"] == 0 and p["fx"] == 0 and p["t_load"] >= p["t_end"]
+    if not static:
+        return None
     return {"tip_y": p["fy"] * (p["L"] ** 3 / (3 * p["EI"]) + p["L"] / p["GA"])}
 
 
