@@ -4,6 +4,7 @@
 # moment M(t) = (t / t_end) 2 pi EI / L.  At t_end the exact solution is a
 # full circle of radius L / (2 pi): the tip returns to the clamp and has
 # turned by 2 pi.  (Kinon, Betsch & Eugster 2025; Simo & Vu-Quoc 1986.)
+# `--set turns=k` multiplies the moment by k: k circles of radius L/(2 pi k).
 #
 # Statics through the same integrator: the densities are zero (rhoA = rhoI =
 # 0), so each midpoint step is the static equilibrium of the midpoint state
@@ -18,7 +19,7 @@ import numpy as np
 
 from rodfem import Load, Problem, Support, ramp
 from rodfem.cli import main
-from rodfem.scene import Scene, common, density, stiffness
+from rodfem.scene import Parameter, Scene, common, density, stiffness
 
 from demos._planar import beam, material_parameters
 
@@ -29,11 +30,12 @@ parameters = common(n_elements=10, dt=0.01, t_end=1.0) + material_parameters() +
     stiffness("EI", 500.0, "N m^2", "bending stiffness"),
     density("rhoA", 0.0, "kg/m", "mass per length (0: statics)"),
     density("rhoI", 0.0, "kg m", "rotary inertia per length (0: statics)"),
+    Parameter("turns", 1.0, "", "end moment 2 pi turns EI/L: the beam rolls into `turns` circles", low=0),
 ]
 
 
 def build(p, comm):
-    moment = 2 * np.pi * p["EI"] / p["L"]
+    moment = 2 * np.pi * p["turns"] * p["EI"] / p["L"]
     loads = [Load("omega", ramp(moment, p["t_end"]), "right", "end moment")]
     initial = {"r": lambda x: np.vstack([x[0], 0 * x[0]])}
     return Problem(beam(p), p["L"], p["n_elements"], loads=loads, supports=[Support("left", "clamped")],
@@ -41,8 +43,14 @@ def build(p, comm):
 
 
 def reference(p):
-    """Exact circle at t_end: tip at the clamp (0, 0)."""
-    return {"tip_x": 0.0, "tip_y": 0.0, "scale": p["L"]}
+    """Exact circle at t_end (pure bending: no axial or shear strain), radius R = L/(2 pi turns):
+    tip at R (sin 2 pi turns, 1 - cos 2 pi turns), i.e. back at the clamp for whole turns."""
+    if p["rhoA"] != 0 or p["rhoI"] != 0:
+        return None
+    theta = 2 * np.pi * p["turns"]
+    R = p["L"] / theta if theta else np.inf
+    tip = (R * np.sin(theta), R * (1 - np.cos(theta))) if theta else (p["L"], 0.0)
+    return {"tip_x": float(tip[0]), "tip_y": float(tip[1]), "scale": p["L"]}
 
 
 scene = Scene("roll-up-2d", "cantilever rolled into a full circle by an end moment 2 pi EI/L (static)",
