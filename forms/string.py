@@ -1,0 +1,250 @@
+"""Hyperelastic string (cable) in 3D as a port-Hamiltonian system (seed 003; Papers 4, 5).
+
+State x = (r, v, C) on the reference interval s in [0, L]: position r in R^3,
+velocity v = d_t r (the momentum density is p = rhoA v), and the strain-type
+quantity C = d_s r . d_s r as an independent field.  Hyperelastic stored
+energy W(C) (forms/string_materials.py), stress quantity S = 2 W'(C), contact
+force n = S d_s r, tension N = |n| = S sqrt(C).
+
+    H(x) = int_0^L  1/(2 rhoA) p.p + W(C) ds  (+ 1/2 m_0 |v(0)|^2 + 1/2 m_L |v(L)|^2)
+
+(lumped end masses m_0, m_L >= 0, e.g. the load of a crane).  Seed 003,
+eq. (4), with p = rhoA v:
+
+    d_t r = v,    rhoA d_t v = d_s (S d_s r) + b,    d_t C = 2 d_s r . d_s v,
+
+inputs u = (-n(0, t), n(L, t)) and outputs y = (v(0, t), v(L, t)) (eq. (5)).
+Distributed loads b (gravity rhoA g) are inputs too: a 'domain' `Load` on v,
+with output v and supplied power int b.v ds.  So H here EXCLUDES the
+potential -r.b of seed 003, eq. (3): the work of gravity is booked in the
+supplied work sum h y.u (history column `supplied`), and H - supplied is the
+conserved total energy of a free swing.
+
+Weak form (trial = test spaces: r, v in P1^3, C in DG0), one step
+t_n -> t_{n+1} = t_n + h, x_m = (x_n + x_{n+1})/2, S_bar = 2 grad_bar W(C_n, C_{n+1}):
+
+    int (r_{n+1} - r_n)/h . dr - v_m . dr                                    = 0
+    int rhoA (v_{n+1} - v_n)/h . dv + S_bar d_s r_m . d_s dv  (+ end masses) = ports
+    int [(C_{n+1} - C_n)/h - 2 d_s r_m . d_s v_m] dC                        = 0
+
+The coupling blocks  int S_bar d_s r_m . d_s dv  and  -int 2 d_s r_m . d_s v_m dC
+are the -K(r) and K(r)^T of seed 003, eq. (7): skew-symmetric, with the
+co-energy S/2 of C (the row of v is the row of p divided by rhoA).
+
+Energy balance.  Test the v-row with dv = v_m and the C-row with dC = S_bar/2.
+S_bar/2 is a legal test function: C_n, C_{n+1} are cellwise constant (DG0),
+so the pointwise discrete gradient grad_bar W is cellwise constant as well.
+The coupling terms cancel and
+
+    H(x_{n+1}) - H(x_n) = int rhoA (v_{n+1}-v_n).v_m + [W(C_{n+1}) - W(C_n)] ds + ... = h y.u
+
+exactly (to solver tolerance) for ANY W: grad_bar W (C_{n+1} - C_n) =
+W(C_{n+1}) - W(C_n) is Gonzalez' property (`discrete_gradient` below: the
+difference quotient, with a third-order Taylor fall-back where
+|C_{n+1} - C_n| <= DG_THRESHOLD = 1e-3).  With the midpoint rule
+S = 2 W'(C_m) (`step.effort`) the balance is exact only for W quadratic in
+C (kirchhoff); its error per unit length is W'''(C_m) dC^3 / 24.
+
+Compatibility.  The r-row gives r_{n+1} - r_n = h v_m nodewise (P1 mass
+matrix), hence C_{n+1} - C_n = 2 d_s r_m . d_s (r_{n+1} - r_n) =
+|d_s r_{n+1}|^2 - |d_s r_n|^2 cellwise: C = |d_s r|^2 stays exact if it holds
+at t = 0 (compatible_strains).
+
+Supports: 'pinned' fixes r and v at an end; 'fix-x', 'fix-y', 'fix-z' fix one
+component (e.g. a crane trolley on a horizontal rail: 'fix-y' with y up).
+"""
+import numpy as np
+import ufl
+from dolfinx import fem
+
+from rodfem import compat
+from rodfem.model import Field
+from rodfem.newton import Newton
+from rodfem.ports import ENDS
+
+from forms.string_materials import MATERIALS, Material  # noqa: F401  (re-exported)
+
+
+DG_THRESHOLD = 1e-3
+
+
+def discrete_gradient(W, C0, C1, threshold=DG_THRESHOLD):
+    """Gonzalez' discrete gradient of a scalar W: grad_bar W (C1 - C0) = W(C1) - W(C0) exactly.
+
+        grad_bar W = (W(C1) - W(C0)) / (C1 - C0)              if |C1 - C0| >  threshold
+                   = W'(C_m) + W'''(C_m) (C1 - C0)^2 / 24       otherwise (C_m = (C0 + C1)/2)
+
+    Why a corrected fall-back and threshold 1e-3 (C is dimensionless): the
+    quotient carries the round-off of W(C1) - W(C0), about 2 eps |W| / |dC|
+    in the stress.  With the engine's plain midpoint fall-back below 1e-6
+    (rodfem/integrators.py) that is up to ~1e-10 |W|: a residual floor
+    that keeps Newton above its absolute tolerance 1e-10 (observed with the
+    logarithmic law at W ~ 1: the residual stalls at 3e-10..1e-9).  The
+    Taylor fall-back is the quotient expanded about C_m; its energy error is
+    |W^(5)| |dC|^5 / 1920 <= 5e-19 |W^(5)| per unit length, so the switch can
+    sit at 1e-3, where the quotient's round-off is <= 5e-13 |W|.  (The
+    authors' code uses the plain midpoint derivative below 1e-4, an energy
+    error up to |W'''| 1e-12 / 24.)  Both branches are safe to evaluate:
+    the quotient's denominator is replaced by 1 where it is not used.
+    """
+    Cm = ufl.variable(0.5 * (C0 + C1))
+    W1 = ufl.diff(W(Cm), Cm)
+    W3 = ufl.diff(ufl.diff(W1, Cm), Cm)
+    dC = C1 - C0
+    big = ufl.gt(abs(dC), threshold)
+    quotient = (W(C1) - W(C0)) / ufl.conditional(big, dC, 1.0)
+    return ufl.conditional(big, quotient, W1 + W3 * dC ** 2 / 24)
+
+
+class String:
+    """Hyperelastic PH string: `material` W(C) (a Material), mass per reference length rhoA,
+    lumped end masses {'left': m_0, 'right': m_L} (>= 0)."""
+    supports = {"pinned": ["r", "v"], "fix-x": ["r.0", "v.0"], "fix-y": ["r.1", "v.1"], "fix-z": ["r.2", "v.2"]}
+    position = "r"
+    flows = {"force": "v"}
+    fields = [Field("r", "P", 1, (3,)), Field("v", "P", 1, (3,)), Field("C", "DG", 0)]
+    quadrature_degree = 2   # exact for every term: rhoA v.dv is quadratic, the rest cellwise constant
+
+    def __init__(self, material, rhoA, end_masses=None):
+        if not isinstance(material, Material):
+            raise TypeError("material must be a Material, e.g. string_materials.logarithmic(EA=20)")
+        if not (np.isfinite(rhoA) and rhoA > 0):
+            raise ValueError(f"rhoA must be a positive number (got {rhoA!r})")
+        self.material, self.rhoA = material, float(rhoA)
+        self.end_masses = {k: float(v) for k, v in (end_masses or {}).items()}
+        for end, m in self.end_masses.items():
+            if end not in ENDS or not (np.isfinite(m) and m >= 0):
+                raise ValueError(f"end_masses: need 'left'/'right' -> mass >= 0 (got {end!r}: {m!r})")
+        self._constants = {}
+
+    # The numbers enter the forms as fem.Constants (one set per mesh), so a
+    # new EA, rhoA or end mass does not trigger a new JIT compilation.
+    def constants(self, domain):
+        key = id(domain)
+        if key not in self._constants:
+            c = {name: fem.Constant(domain, float(v)) for name, v in self.material.params.items()}
+            c["rhoA"] = fem.Constant(domain, self.rhoA)
+            for end, m in self.end_masses.items():
+                c["m_" + end] = fem.Constant(domain, m)
+            self._constants[key] = c
+        return self._constants[key]
+
+    def W(self, C, domain):
+        c = self.constants(domain)
+        return self.material(C, {k: c[k] for k in self.material.params})
+
+    def _lumped(self, ds, density):
+        """sum_ends m_end * density at s = 0, L (only ends with a mass)."""
+        c = self.constants(ds.ufl_domain())
+        terms = [c["m_" + end] * density * ds(ENDS[end]) for end, m in self.end_masses.items() if m > 0]
+        return sum(terms[1:], terms[0]) if terms else None
+
+    def hamiltonian(self, x, dx, ds):
+        """H = int 1/2 rhoA v.v + W(C) ds + 1/2 m |v|^2 at the ends."""
+        dom = dx.ufl_domain()
+        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + self.W(x["C"], dom)) * dx
+        ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
+        return H + ends if ends is not None else H
+
+    def residual(self, step, test, dx, ds):
+        """The three rows of the module docstring, S_bar = 2 step.effort(W, C)."""
+        dom = dx.ufl_domain()
+        dr, dv, dC = test["r"], test["v"], test["C"]
+        rs, v = step.mid("r").dx(0), step.mid("v")
+        W = (lambda C: self.W(C, dom))
+        if step.rule == "discrete-gradient":
+            Wbar = discrete_gradient(W, step.x0["C"], step.x1["C"])
+        else:
+            (Wbar,) = step.effort(W, ["C"])
+        S = 2 * Wbar
+        F = (ufl.inner(step.rate("r") - v, dr)
+             + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
+             + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC) * dx
+        ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
+        return F + ends if ends is not None else F
+
+    def compatible_strains(self, x):
+        """C = d_s r . d_s r."""
+        return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0))}
+
+    def momentum(self, x):
+        """p = rhoA v and L = r x rhoA v (densities); empty with end masses (they are point masses)."""
+        if any(m > 0 for m in self.end_masses.values()):
+            return {}
+        p = self.rhoA * x["v"]
+        Lm = ufl.cross(x["r"], p)
+        return {"p_x": p[0], "p_y": p[1], "p_z": p[2], "L_x": Lm[0], "L_y": Lm[1], "L_z": Lm[2]}
+
+    def tension(self, C):
+        """N = 2 W'(C) sqrt(C) (UFL)."""
+        Cv = ufl.variable(C)
+        return 2 * ufl.diff(self.material(Cv), Cv) * ufl.sqrt(C)
+
+
+# -- initial states -------------------------------------------------------------------
+
+def set_state(problem):
+    """After editing problem.x0: start x_{n+1} and the support values from it."""
+    problem.x0.x.scatter_forward()
+    problem.x1.x.array[:] = problem.x0.x.array
+    problem.state0.x.array[:] = problem.x0.x.array
+
+
+def static_equilibrium(problem, t=0.0, supports=None, options=None):
+    """Put problem.x0 at rest in the discrete static equilibrium under its loads at time t.
+
+    Solves for r in P1^3 (starting from the current r, which must be in
+    tension where the tangent stiffness would vanish otherwise)
+
+        int 2 W'(|d_s r|^2) d_s r . d_s dr ds = sum of the loads' int u.dr   (supports: fixed r)
+
+    and sets C = |d_s r|^2, v = 0.  This is exactly the step equations with
+    x_{n+1} = x_n, v = 0: an equilibrium found here stays at rest to solver
+    tolerance.  Only loads with the default pairing (u.v) are supported.
+    `supports` (default: the problem's) fix r in the static solve; they must
+    remove the rigid motions the loads do not (e.g. a crane trolley free to
+    roll is held for the static solve).  Returns the number of Newton iterations.
+    """
+    model, S = problem.model, problem.space
+    Vr, rdofs = S.collapse("r")
+    r = fem.Function(Vr)
+    r.x.array[:] = problem.x0.x.array[rdofs]
+    r0 = fem.Function(Vr)
+    r0.x.array[:] = r.x.array
+    dr = ufl.TestFunction(Vr)
+    dom = problem.dx.ufl_domain()
+    C = ufl.variable(ufl.inner(r.dx(0), r.dx(0)))
+    F = 2 * ufl.diff(model.W(C, dom), C) * ufl.inner(r.dx(0), dr.dx(0)) * problem.dx
+    for load in problem.loads:
+        if load.pairing is not None or load.flow != "v":
+            raise ValueError(f"static_equilibrium: load {load.name} is not a plain force on v")
+        u = fem.Constant(problem.mesh, np.asarray(load.value(t), dtype=float))
+        F -= ufl.inner(u, dr) * load.measure(problem.dx, problem.ds)
+    bcs = []
+    for sup in (problem.supports if supports is None else supports):
+        for name in model.supports[sup.kind]:
+            base, _, comp = name.partition(".")
+            if base != "r":
+                continue
+            sub = Vr if not comp else Vr.sub(int(comp))
+            dofs = fem.locate_dofs_topological(sub, 0, problem.facets[sup.end])
+            bcs.append(fem.dirichletbc(r0, dofs))
+    newton = Newton(compat.form(F), compat.form(ufl.derivative(F, r)), r, bcs,
+                    options=options, prefix="rodfem_static_")
+    solve = newton.solve(0, t)
+    problem.x0.x.array[rdofs] = r.x.array
+    S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))
+    S.assign(problem.x0, "C", ufl.inner(r.dx(0), r.dx(0)))
+    set_state(problem)
+    return solve.iterations
+
+
+def map_positions(problem, f):
+    """r <- f(r) at every node (f maps an (n, 3) array to an (n, 3) array); C follows, v unchanged."""
+    S = problem.space
+    Vr, rdofs = S.collapse("r")
+    pos = problem.x0.x.array[rdofs].reshape(-1, 3)
+    problem.x0.x.array[rdofs] = np.asarray(f(pos), dtype=float).reshape(-1)
+    r = S.split(problem.x0)["r"]
+    S.assign(problem.x0, "C", ufl.inner(r.dx(0), r.dx(0)))
+    set_state(problem)
