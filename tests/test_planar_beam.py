@@ -168,3 +168,20 @@ def test_roll_up_returns_to_clamp_with_refinement():
         assert res.rows[-1]["H"] == pytest.approx((2 * np.pi * 500 / 10) ** 2 * 10 / 1000, rel=1e-3)
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] <= 2e-4
+
+
+def test_initially_curved_beam_rests_in_its_reference_shape():
+    """Quarter-circle beam with reference curvature kappa0 = 1/R stays at rest (to O(h^2):
+    the P1 chord is shorter than the arc by (h/R)^2/24); with kappa0 = 0 it springs open."""
+    R = L / (np.pi / 2)
+    init = {"r": lambda x: np.vstack([R * np.sin(x[0] / R), R * (1 - np.cos(x[0] / R))]),
+            "phi": lambda x: x[0] / R}
+
+    def drift(n, kappa0):
+        p = Problem(PlanarBeam(1.0, 10.0, quadratic(1e4, 1e4, 100.0, kappa0=kappa0)), L, n, initial=init)
+        res = run(p, 0.05, 2.0)
+        return np.max(np.hypot(res.column("tip_x") - res.column("tip_x")[0],
+                               res.column("tip_y") - res.column("tip_y")[0]))
+    d10, d20 = drift(10, 1 / R), drift(20, 1 / R)
+    assert d20 <= 3e-3 and 3.5 <= d10 / d20 <= 4.5  # second order in h
+    assert drift(10, 0.0) > 1.0
