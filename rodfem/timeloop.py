@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .newton import NewtonFailure  # noqa: F401  (re-exported for callers)
+from .newton import NewtonFailure
 
 
 @dataclass
@@ -53,13 +53,22 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
         from tqdm import tqdm
         bar = tqdm(total=n_steps, unit="step", dynamic_ncols=True)
     supplied = 0.0
+    previous = None  # x_{n-1}, for the Newton start x_{n+1}^0 = 2 x_n - x_{n-1}
     t0 = time.perf_counter()
     try:
         for n in range(n_steps):
             t = n * dt
             for load in problem.loads:
                 load.update(t + 0.5 * dt)
-            solve = problem.newton.solve(n + 1, t + dt)
+            try:
+                if previous is not None:
+                    problem.x1.x.array[:] = 2.0 * problem.x0.x.array - previous
+                solve = problem.newton.solve(n + 1, t + dt)
+            except NewtonFailure:
+                if previous is None:
+                    raise
+                problem.x1.x.array[:] = problem.x0.x.array  # retry from x_n
+                solve = problem.newton.solve(n + 1, t + dt)
             H_new = problem.hamiltonian()
             work = problem.supplied_work()
             supplied += work
@@ -68,6 +77,7 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
             if not np.isfinite(H_new):
                 raise NewtonFailure(n + 1, t + dt, float("nan"), solve.iterations, "non-finite energy")
             H = H_new
+            previous = problem.x0.x.array.copy()
             problem.x0.x.array[:] = problem.x1.x.array
             res.rows.append(row)
             res.steps = n + 1
