@@ -33,7 +33,7 @@ from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
 from demos.hanging_cable import material_parameters, string_model
-from forms.string import MATERIALS
+from forms.string import MATERIALS, newton_settings
 
 parameters = common(n_elements=100, dt=2e-3, t_end=0.16, integrator="discrete-gradient", frames=20) + \
     material_parameters(material="kirchhoff", EA=100.0) + [
@@ -70,9 +70,10 @@ def build(p, comm):
         "v": lambda x: np.vstack([0 * x[0], c_s * (x[0] - s0) / sig ** 2 * bump(x[0]), 0 * x[0]]),
     }
     # both ends pinned at their initial positions (0 and lambda_0 L e_x); no load
-    return Problem(string_model(p), p["L"], p["n_elements"], initial=initial,
-                   supports=[Support("left", "pinned"), Support("right", "pinned")],
-                   integrator=p["integrator"], comm=comm)
+    problem = Problem(string_model(p), p["L"], p["n_elements"], initial=initial,
+                      supports=[Support("left", "pinned"), Support("right", "pinned")],
+                      integrator=p["integrator"], comm=comm)
+    return newton_settings(problem)
 
 
 def reference(p):

@@ -67,6 +67,25 @@ from forms.string_materials import MATERIALS, Material  # noqa: F401  (re-export
 
 DG_THRESHOLD = 1e-3
 
+# Newton for string problems: besides the engine's tests |F| <= 1e-10 or
+# |F| <= 1e-12 |F_0|, stop when the Newton update is at round-off,
+# |dx| <= 1e-14 |x|.  Why: the tension is computed from C ~ 1, so the residual
+# carries round-off ~ eps EA; for a stiff cable (EA = 1e7) it stalls at ~2e-9
+# with x already converged to the last digit (the update then is ~1e-16 |x|).
+# Soft cables stop on |F| as before.
+NEWTON_OPTIONS = {"snes_stol": 1e-14}
+
+
+def newton_settings(problem):
+    """Apply NEWTON_OPTIONS to this problem's SNES (not through the global PETSc options
+    database, where they would leak into every later Problem of the process); a nonzero
+    value given by the user (PETSC_OPTIONS="-rodfem_snes_stol ...") wins over ours, the
+    engine's default 0 does not."""
+    from petsc4py import PETSc
+    if PETSc.Options().getReal("rodfem_snes_stol", 0.0) == 0.0:
+        problem.newton.snes.setTolerances(stol=NEWTON_OPTIONS["snes_stol"])
+    return problem
+
 
 def discrete_gradient(W, C0, C1, threshold=DG_THRESHOLD):
     """Gonzalez' discrete gradient of a scalar W: grad_bar W (C1 - C0) = W(C1) - W(C0) exactly.
@@ -229,8 +248,13 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
             sub = Vr if not comp else Vr.sub(int(comp))
             dofs = fem.locate_dofs_topological(sub, 0, problem.facets[sup.end])
             bcs.append(fem.dirichletbc(r0, dofs))
+    # Stopping on the step size too: the residual carries round-off of order
+    # eps EA (the tension is computed from C - 1), which is above an absolute
+    # 1e-10 for a stiff cable (EA = 1e7: the residual stalls near 1e-8) while
+    # the position is converged to round-off.
+    settings = {**NEWTON_OPTIONS, **(options or {})}
     newton = Newton(compat.form(F), compat.form(ufl.derivative(F, r)), r, bcs,
-                    options=options, prefix="rodfem_static_")
+                    options=settings, prefix="rodfem_static_")
     solve = newton.solve(0, t)
     problem.x0.x.array[rdofs] = r.x.array
     S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))
