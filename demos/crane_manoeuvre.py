@@ -1,9 +1,9 @@
 # # Crane manoeuvre: a hanging cable with a load, driven at the top
 #
 # The harbour-crane situation of seed 003: a cable of reference length L
-# hangs from a trolley at the origin (y is up, gravity in -y) and carries a
+# hangs from a trolley at the origin (z is up, gravity in -z) and carries a
 # load of mass m at its lower end.  The trolley rides on a horizontal rail:
-# its vertical position is fixed (support 'fix-y'), and it is pushed along x
+# its vertical position is fixed (support 'fix-z'), and it is pushed along x
 # by a force input F(t) = F0 sin(2 pi t / t_move) for t <= t_move, zero
 # after -- accelerate, then brake, the "left-to-right manoeuvre" of the
 # authors (Paper 4: F = rhoA sin(pi t / 2) for t <= 4, EA = 20, rhoA = 1,
@@ -31,7 +31,7 @@ from forms.string import newton_settings, static_equilibrium
 
 parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) cable length"),
-    Parameter("g", 9.81, "m/s^2", "gravity, acting in -y", low=0),
+    Parameter("g", 9.81, "m/s^2", "gravity, acting in -z", low=0),
     Parameter("tip_mass", 0.5, "kg", "mass of the load at the lower end", low=0),
     Parameter("trolley_mass", 0.0, "kg", "mass of the trolley at the top (0: the cable's top node only)", low=0),
     Parameter("F0", 1.0, "N", "amplitude of the trolley force"),
@@ -50,11 +50,11 @@ def build(p, comm):
     m = p["tip_mass"]
     loads = [Load("v", trolley_force(p), "left", "trolley force")]
     if p["g"] > 0:
-        loads.append(Load("v", [0.0, -p["rhoA"] * p["g"], 0.0], "domain", "gravity"))
+        loads.append(Load("v", [0.0, 0.0, -p["rhoA"] * p["g"]], "domain", "gravity"))
         if m > 0:
-            loads.append(Load("v", [0.0, -m * p["g"], 0.0], "right", "load weight"))
+            loads.append(Load("v", [0.0, 0.0, -m * p["g"]], "right", "load weight"))
     model = string_model(p, end_masses={"left": p["trolley_mass"], "right": m})
-    problem = Problem(model, p["L"], p["n_elements"], loads=loads, supports=[Support("left", "fix-y")],
+    problem = Problem(model, p["L"], p["n_elements"], loads=loads, supports=[Support("left", "fix-z")],
                       initial={"r": hanging_guess(p, m)}, integrator=p["integrator"], comm=comm)
     # Start at rest in the static equilibrium under gravity (F(0) = 0); for
     # the static solve the trolley is held (pinned), otherwise the rigid

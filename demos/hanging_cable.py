@@ -1,10 +1,11 @@
 # # Hanging cable: a hyperelastic string swinging under gravity
 #
-# A string of reference length L hangs from a pin at the origin (y is up,
-# gravity acts in -y).  It starts at rest in its own static equilibrium
+# A string of reference length L hangs from a pin at the origin (z is up,
+# gravity acts in -z).  It starts at rest in its own static equilibrium
 # (stretched by its weight: the stretch grows towards the top), turned about
-# the pin by the tilt angle, and then swings like a heavy chain; with vz0 > 0
-# the free end is also pushed out of the plane and the swing becomes 3D.
+# the pin by the tilt angle (in the x-z plane), and then swings like a heavy
+# chain; with vy0 != 0 the free end is also pushed out of that plane and the
+# swing becomes 3D.
 #
 # Model: forms/string.py (state r, v, C = |d_s r|^2; H = kinetic + W(C)),
 # materials: forms/string_materials.py.  Default data as in the authors'
@@ -20,7 +21,7 @@
 # logarithmic law the balance error jumps by orders of magnitude.
 #
 # Run it:  rodfem run hanging-cable --out results/hanging-cable
-#          rodfem run hanging-cable --set material=tension-only --set vz0=2 --out results/hanging-3d
+#          rodfem run hanging-cable --set material=tension-only --set vy0=2 --out results/hanging-3d
 import sys
 
 import numpy as np
@@ -54,22 +55,22 @@ def hanging_guess(p, tip_mass=0.0):
     """A straight vertical line with the linearised stretch of the top element (all in tension)."""
     N_top = p["g"] * (p["rhoA"] * p["L"] + tip_mass)
     lam = 1.0 + N_top / p["EA"]
-    return lambda x: np.vstack([0 * x[0], -lam * x[0], 0 * x[0]])
+    return lambda x: np.vstack([0 * x[0], 0 * x[0], -lam * x[0]])
 
 
 parameters = common(n_elements=10, dt=0.01, t_end=3.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) length"),
-    Parameter("g", 9.81, "m/s^2", "gravity, acting in -y", low=0),
+    Parameter("g", 9.81, "m/s^2", "gravity, acting in -z", low=0),
     Parameter("angle", 30.0, "deg", "initial tilt of the cable about the pin (0 = hanging still)",
               low=-180, high=180),
-    Parameter("vz0", 0.0, "m/s", "initial out-of-plane velocity of the free end (linear along s)"),
+    Parameter("vy0", 0.0, "m/s", "initial out-of-plane (y) velocity of the free end (linear along s)"),
 ]
 
 
 def build(p, comm):
-    # The port of gravity: a force per length rhoA g (0, -1, 0) on the whole
+    # The port of gravity: a force per length rhoA g (0, 0, -1) on the whole
     # string, paired with the velocity v.  The top end s = 0 is pinned.
-    loads = [Load("v", [0.0, -p["rhoA"] * p["g"], 0.0], "domain", "gravity")] if p["g"] > 0 else []
+    loads = [Load("v", [0.0, 0.0, -p["rhoA"] * p["g"]], "domain", "gravity")] if p["g"] > 0 else []
     problem = Problem(string_model(p), p["L"], p["n_elements"], loads=loads,
                       supports=[Support("left", "pinned")], initial={"r": hanging_guess(p)},
                       integrator=p["integrator"], comm=comm)
@@ -79,10 +80,10 @@ def build(p, comm):
     if p["g"] > 0:
         static_equilibrium(problem)
     a = np.radians(p["angle"])
-    R = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    R = np.array([[np.cos(a), 0.0, -np.sin(a)], [0.0, 1.0, 0.0], [np.sin(a), 0.0, np.cos(a)]])  # -e_z -> (sin a, 0, -cos a)
     map_positions(problem, lambda pos: pos @ R.T)
-    if p["vz0"] != 0:
-        problem.space.assign(problem.x0, "v", lambda x: np.vstack([0 * x[0], 0 * x[0], p["vz0"] * x[0] / p["L"]]))
+    if p["vy0"] != 0:
+        problem.space.assign(problem.x0, "v", lambda x: np.vstack([0 * x[0], p["vy0"] * x[0] / p["L"], 0 * x[0]]))
         problem.x1.x.array[:] = problem.x0.x.array
     return newton_settings(problem)
 

@@ -51,7 +51,7 @@ matrix), hence C_{n+1} - C_n = 2 d_s r_m . d_s (r_{n+1} - r_n) =
 at t = 0 (compatible_strains).
 
 Supports: 'pinned' fixes r and v at an end; 'fix-x', 'fix-y', 'fix-z' fix one
-component (e.g. a crane trolley on a horizontal rail: 'fix-y' with y up).
+component (e.g. a crane trolley on a horizontal rail: 'fix-z' with z up).
 """
 import numpy as np
 import ufl

@@ -79,10 +79,10 @@ def test_scalar_discrete_gradient_property(dC):
 def test_discrete_gradient_balance_every_material(material):
     """3D swing (tilt + out-of-plane push) under gravity: balance per step to 1e-9 max|H|."""
     res, s = run_scene(hanging, {"material": material, "integrator": "discrete-gradient", "t_end": 2.0,
-                                 "vz0": 1.0})
+                                 "vy0": 1.0})
     assert res.steps == 200
     assert balance_ok(res), relative_balance(res)
-    assert np.ptp(res.column("tip_x")) > 0.5 and np.ptp(res.column("tip_z")) > 0.1   # it really swings in 3D
+    assert np.ptp(res.column("tip_x")) > 0.5 and np.ptp(res.column("tip_y")) > 0.1   # it really swings in 3D
     # gravity is an input: H alone changes, H - supplied is the conserved total energy
     assert np.ptp(res.column("H")) > 1.0
 
@@ -109,7 +109,7 @@ def test_crane_balance_with_end_masses_and_compatibility():
 
 def test_strain_stays_compatible():
     """C_{n+1} = |d_s r_{n+1}|^2 cellwise after many steps (P1 r, DG0 C)."""
-    p = hanging.values({"t_end": 1.0, "vz0": 1.0})
+    p = hanging.values({"t_end": 1.0, "vy0": 1.0})
     pr = hanging.build(p, MPI.COMM_WORLD)
     run(pr, p["dt"], p["t_end"])
     X = pr.space.split(pr.x1)
@@ -122,8 +122,8 @@ def test_strain_stays_compatible():
 def test_static_equilibrium_stays_at_rest():
     res, _ = run_scene(crane, {"F0": 0.0, "t_end": 1.0})
     assert np.max(np.abs(res.column("tip_x"))) <= 1e-12
-    tip_y = res.column("tip_y")
-    assert np.ptp(tip_y) <= 1e-10 * abs(tip_y[0])
+    tip_z = res.column("tip_z")
+    assert np.ptp(tip_z) <= 1e-10 * abs(tip_z[0])
     assert np.max(np.abs(res.column("H") - res.column("H")[0])) <= 1e-12
 
 
@@ -131,7 +131,7 @@ def test_static_equilibrium_stays_at_rest():
 
 def test_second_order_in_time():
     def tip(dt):
-        res, _ = run_scene(hanging, {"n_elements": 8, "dt": dt, "t_end": 0.4, "vz0": 1.0})
+        res, _ = run_scene(hanging, {"n_elements": 8, "dt": dt, "t_end": 0.4, "vy0": 1.0})
         return np.array([res.column(c)[-1] for c in ("tip_x", "tip_y", "tip_z")])
     # asymptotic once the axial modes (omega ~ 70/s at 8 elements) are resolved, omega h < 1
     ref = tip(0.4 / 2048)
@@ -142,7 +142,7 @@ def test_second_order_in_time():
 
 def exact_hanging(s, L, EA, rhoA, g):
     """Log law, hanging under its weight: N = rhoA g (L - s), lambda = N/EA + sqrt(1 + (N/EA)^2);
-    y(s) = -int_0^s lambda (closed form with asinh)."""
+    z(s) = -int_0^s lambda (closed form with asinh)."""
     k = rhoA * g / EA
 
     def F(u):   # int (u + sqrt(1 + u^2)) du
@@ -167,7 +167,7 @@ def test_spatial_order_static_hanging_cable():
         for i in range(n):
             a, b = s[i], s[i + 1]
             q = a + (b - a) * (xg + 1) / 2
-            yh = r[i, 1] + (r[i + 1, 1] - r[i, 1]) * (q - a) / (b - a)
+            yh = r[i, 2] + (r[i + 1, 2] - r[i, 2]) * (q - a) / (b - a)
             ye, Ce = exact_hanging(q, L, EA, rhoA, g)
             eR += (b - a) / 2 * np.sum(wg * (yh - ye) ** 2)
             eC += (b - a) / 2 * np.sum(wg * (C[i, 0] - Ce) ** 2)
@@ -214,7 +214,7 @@ def test_wave_speed():
 def test_stiff_cable():
     """EA / (rhoA g L) = 1.02e6: axial frequencies ~1e4 x those of the swing; no divergence,
     the balance holds and the cable stays (nearly) inextensible while it swings in 3D."""
-    p = hanging.values({"EA": 1e7, "t_end": 1.0, "dt": 0.01, "vz0": 0.5})
+    p = hanging.values({"EA": 1e7, "t_end": 1.0, "dt": 0.01, "vy0": 0.5})
     assert p["EA"] / (p["rhoA"] * p["g"] * p["L"]) >= 1e6
     pr = hanging.build(p, MPI.COMM_SELF)
     strain = []
@@ -226,14 +226,14 @@ def test_stiff_cable():
     assert res.steps == 100 and balance_ok(res), relative_balance(res)
     # static strain at the top: C - 1 ~ 2 rhoA g L / EA = 2e-6; swinging changes the tension O(1)
     assert max(strain) < 1e-5
-    assert np.ptp(res.column("tip_x")) > 0.3 and np.ptp(res.column("tip_z")) > 0.1
+    assert np.ptp(res.column("tip_x")) > 0.3 and np.ptp(res.column("tip_y")) > 0.1
 
 
 @pytest.mark.parametrize("EA, dt", [(20.0, 0.25), (1e7, 0.1)])
 def test_large_time_steps(EA, dt):
     res, s = run_scene(hanging, {"EA": EA, "dt": dt, "t_end": 5.0})
     assert balance_ok(res), relative_balance(res)
-    d = np.hypot(res.column("tip_x"), res.column("tip_y"))
+    d = np.hypot(res.column("tip_x"), res.column("tip_z"))
     assert np.all(np.isfinite(d)) and np.max(d) < 2.0   # bounded (the stretch at EA = 20 is ~1.3)
 
 
@@ -294,5 +294,5 @@ def test_crane_mpi_matches_serial(rodfem, tmp_path):
     assert r1.returncode == 0 and r2.returncode == 0, r2.stderr
     s1, s2 = (json.load(open(os.path.join(tmp_path, d, "summary.json"))) for d in ("s", "p"))
     assert s2["mpi_ranks"] == 2 and s2["max_balance_error_relative"] <= 1e-9
-    for k in ("tip_x", "tip_y", "H"):
+    for k in ("tip_x", "tip_z", "H"):
         assert s2["final"][k] == pytest.approx(s1["final"][k], rel=1e-9, abs=1e-12)
