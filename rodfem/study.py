@@ -266,6 +266,7 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
     study = {"scene": scene.name, "parameters": p, "integrator": p["integrator"],
              "reference": ref_desc, "reference_kind": "analytic" if analytic else "refined-run",
              "error_measure": measure, "compared_columns": cols, "scale": scale,
+             "reference_values": {c: float(v) for c, v in zip(cols, q_ref)},
              "orders": orders, "paths": {k: [[n, dt] for n, dt in v] for k, v in paths.items()},
              "failures": [{"n_elements": r["n_elements"], "dt": r["dt"], **r["failure_info"]}
                           for r in runs.values() if r["status"] != "completed"]}
