@@ -7,20 +7,22 @@ contact force n = S d_s r and the tension N = |n| = S lambda = 2 W'(C) sqrt(C).
 Every material here has the same small-strain stiffness: near C = 1,
 S ~ (EA/2)(C - 1) ~ EA (lambda - 1), i.e. W''(1) = EA/4.
 
-Adding a material is writing ONE function of C (UFL scalar) and the
-parameters, decorated with `@material`:
+Adding a material is writing ONE function of C (a UFL scalar) and its
+parameters, decorated with `@material` -- `biot` below is the example:
 
     @material
-    def neo_hooke(C, EA):
-        "W = EA/4 (C - 1 - ln C) ... docstring with the formula"
-        return EA / 4 * (...)
+    def biot(C, EA):
+        # docstring: the formula, W = EA/2 (sqrt(C) - 1)^2, N = EA (lambda - 1)
+        return EA / 2 * (ufl.sqrt(C) - 1) ** 2
 
-`neo_hooke(EA=10.0)` then is a `Material` the string model takes; every
-parameter must be a positive number (checked, one-line ValueError), and the
+`biot(EA=10.0)` then is a `Material` the string model takes; every
+parameter must be a positive number (checked: one-line ValueError), and the
 parameters enter the compiled forms as run-time constants, so changing a
 value does not recompile.  Add the name to MATERIALS to make it selectable
-in the scenes (``--set material=...``).  Any W works with the
-discrete-gradient integrator: the energy balance is exact whatever W is.
+in the scenes (``--set material=biot``) and covered by the per-material
+tests.  Any W works with the discrete-gradient integrator: the energy
+balance is exact whatever W is.  Keep W''(1) = EA/4 so that EA is the
+small-strain stiffness, and state where W is defined (e.g. C > 0).
 """
 import inspect
 import math
@@ -97,6 +99,15 @@ def logarithmic(C, EA):
     return EA / 4 * (C - ufl.ln(C) - 1)
 
 
+@material
+def biot(C, EA):
+    """Linear in the stretch:  W = EA/2 (sqrt(C) - 1)^2,  N = EA (lambda - 1).
+
+    S = EA (1 - 1/sqrt(C)).  Needs C > 0 (the tangent is infinite at C = 0).
+    """
+    return EA / 2 * (ufl.sqrt(C) - 1) ** 2
+
+
 def _asinh(y):
     """asinh(y) = sign(y) ln(|y| + sqrt(y^2 + 1)), free of cancellation for either sign."""
     a = abs(y)
@@ -122,4 +133,4 @@ def tension_only(C, EA, delta=1e-3):
     return EA / 16 * (x * x + x * root + delta * delta * _asinh(x / delta))
 
 
-MATERIALS = {"kirchhoff": kirchhoff, "logarithmic": logarithmic, "tension-only": tension_only}
+MATERIALS = {"kirchhoff": kirchhoff, "logarithmic": logarithmic, "tension-only": tension_only, "biot": biot}

@@ -15,7 +15,7 @@ from rodfem.driver import run_scene
 from rodfem.scene import ParameterError
 
 from forms.string import String, discrete_gradient, newton_settings
-from forms.string_materials import MATERIALS, kirchhoff, logarithmic, tension_only
+from forms.string_materials import MATERIALS, biot, kirchhoff, logarithmic, tension_only
 
 # the scenes by import (the CLI finds them through the entry points in pyproject.toml)
 from demos.crane_manoeuvre import scene as crane  # noqa: E402
@@ -42,6 +42,7 @@ def test_material_tensions(lam):
     EA = 7.0
     assert logarithmic(EA=EA).tension(lam) == pytest.approx(EA / 2 * (lam - 1 / lam), rel=1e-12)
     assert kirchhoff(EA=EA).tension(lam) == pytest.approx(EA / 2 * (lam ** 3 - lam), rel=1e-12)
+    assert biot(EA=EA).tension(lam) == pytest.approx(EA * (lam - 1), rel=1e-12)
     t = tension_only(EA=EA).tension(lam)
     if lam >= 1.3:   # taut: the Kirchhoff law up to the transition width delta = 1e-3
         assert t == pytest.approx(EA / 2 * (lam ** 3 - lam), rel=2e-3)
