@@ -10,6 +10,11 @@ from rodfem.scene import Parameter, ParameterError, density
 from forms import cosserat_rod
 
 
+# Newton options of the 3D rod scenes (the engine's defaults; see
+# benchmarks/bench_cosserat_rod.md for the linear solvers tried).
+NEWTON = {}
+
+
 def compliance(name, default, unit, doc):
     """A compliance C >= 0 (0: the strain is constrained)."""
     return Parameter(name, default, unit, doc, low=0)

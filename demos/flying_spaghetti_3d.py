@@ -25,7 +25,7 @@ from rodfem import Load, Problem, constant_in_time
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common
 
-from demos._rod3d import end_moment, material_parameters, rod, straight
+from demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
 
 parameters = common(n_elements=10, dt=0.1, t_end=15.0) + [
     Parameter("variant", "planar", "", "body-fixed end moment about d3 (planar) or about the axis d1 (spatial)",
@@ -53,7 +53,7 @@ def build(p, comm):
     loads = [Load("v", constant_in_time([p["Fx"], p["Fy"], p["Fz"]], until=p["t_load"]), "right", "end force"),
              end_moment(constant_in_time(M_B, until=p["t_load"]), "body")]
     return Problem(rod(p), LENGTH, p["n_elements"], loads=loads, initial=straight(START, directors),
-                   integrator=p["integrator"], comm=comm)
+                   integrator=p["integrator"], comm=comm, newton_options=NEWTON)
 
 
 scene = Scene("flying-spaghetti-3d", "free rod tumbling after an end force and a body-fixed (bending or torsional) moment",

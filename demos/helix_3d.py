@@ -30,7 +30,7 @@ from rodfem import Problem, Support
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
-from demos._rod3d import end_moment, smooth_ramp, straight
+from demos._rod3d import NEWTON, end_moment, smooth_ramp, straight
 from forms.cosserat_rod import CosseratRod
 
 R0, HEIGHT, COILS = 10.0, 50.0, 2
@@ -64,7 +64,7 @@ def build(p, comm):
     directors = (d1, np.array([0.0, 1.0, 0.0]), np.array([-C, 0.0, 1.0]) / np.sqrt(1 + C**2))
     initial = straight((0.0, -R0, 0.0), directors)
     return Problem(rod, LENGTH, p["n_elements"], loads=[end_moment(smooth_ramp(moment, p["t_end"]), "body")],
-                   supports=[Support("left", "clamped")], initial=initial, integrator=p["integrator"], comm=comm)
+                   supports=[Support("left", "clamped")], initial=initial, integrator=p["integrator"], comm=comm, newton_options=NEWTON)
 
 
 def reference(p):

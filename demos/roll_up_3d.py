@@ -23,7 +23,7 @@ from rodfem import Problem, Support
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
-from demos._rod3d import end_moment, material_parameters, rod, smooth_ramp, straight
+from demos._rod3d import NEWTON, end_moment, material_parameters, rod, smooth_ramp, straight
 
 EI = 500.0
 parameters = common(n_elements=8, dt=0.02, t_end=1.0) + [
@@ -42,7 +42,7 @@ def build(p, comm):
     loads = [end_moment(smooth_ramp(moment, p["t_end"]), p["moment_frame"])]
     initial = straight((0.0, 0.0, 0.0), np.eye(3))
     return Problem(rod(p), p["L"], p["n_elements"], loads=loads, supports=[Support("left", "clamped")],
-                   initial=initial, integrator=p["integrator"], comm=comm)
+                   initial=initial, integrator=p["integrator"], comm=comm, newton_options=NEWTON)
 
 
 def reference(p):

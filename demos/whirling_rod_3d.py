@@ -22,7 +22,7 @@ from rodfem import Problem
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common
 
-from demos._rod3d import material_parameters, rod, straight
+from demos._rod3d import NEWTON, material_parameters, rod, straight
 
 parameters = common(n_elements=8, dt=0.01, t_end=5.0) + [
     Parameter("L", 1.0, "m", "length", low=0, low_open=True),
@@ -35,7 +35,7 @@ def build(p, comm):
     a = np.radians(p["tilt"])
     omega = p["Omega0"] * np.array([np.cos(a), 0.0, np.sin(a)])
     initial = straight((-0.5 * p["L"], 0.0, 0.0), np.eye(3), omega=omega)
-    return Problem(rod(p), p["L"], p["n_elements"], initial=initial, integrator=p["integrator"], comm=comm)
+    return Problem(rod(p), p["L"], p["n_elements"], initial=initial, integrator=p["integrator"], comm=comm, newton_options=NEWTON)
 
 
 scene = Scene("whirling-rod-3d", "free rod spinning about a non-principal axis: H and L_x, L_y, L_z conserved",
