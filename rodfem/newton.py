@@ -16,8 +16,11 @@ from petsc4py import PETSc
 
 from . import compat
 
+# Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
+# round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
+# ~ eps * stiffness, e.g. 2e-9 for EA = 1e7, while x is converged to the last digit).
 DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",
-            "snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_stol": 0.0, "snes_max_it": 25,
+            "snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_stol": 1e-14, "snes_max_it": 25,
             "ksp_type": "preonly", "pc_type": "lu"}
 
 
@@ -48,19 +51,25 @@ class Newton:
         self.b = compat.create_vector(F)
         self.A = fpetsc.create_matrix(J)
         self.xv = compat.petsc_vec(x)
-        opts = PETSc.Options()
         settings = dict(DEFAULTS)
         settings["pc_factor_mat_solver_type"] = "petsc" if comm.size == 1 else "mumps"
         settings.update(options or {})
-        for key, value in settings.items():
-            if not opts.hasName(prefix + key):
-                opts[prefix + key] = value
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
+        # Our settings go through the options database only for this set-up (the
+        # user's own -rodfem_* options win), then are removed so that they do not
+        # leak into the next Problem of the process.
+        opts, ours = PETSc.Options(), []
+        for key, value in settings.items():
+            if not opts.hasName(prefix + key):
+                opts[prefix + key] = value
+                ours.append(prefix + key)
         self.snes.setFromOptions()
         self.snes.getKSP().setFromOptions()
+        for name in ours:
+            opts.delValue(name)
         self._work = self.xv.duplicate()
 
     def _residual(self, snes, xin, b):
