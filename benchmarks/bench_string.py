@@ -28,7 +28,7 @@ from rodfem.driver import run_scene
 from demos.crane_manoeuvre import scene as crane
 from demos.hanging_cable import scene as hanging
 from demos.taut_string_wave import scene as wave, speeds
-from forms.string import String, newton_settings
+from forms.string import String
 from forms.string_materials import MATERIALS, tension_only
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -176,7 +176,6 @@ def extreme():
                  supports=[Support("left", "pinned"), Support("right", "pinned")],
                  initial={"r": lambda x: np.vstack([0.5 * x[0], 0 * x[0], 0 * x[0]])},
                  integrator="discrete-gradient", comm=COMM)
-    newton_settings(pr)
     Cmin, Cmax = [], []
 
     class Track:

@@ -27,7 +27,7 @@ from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
 from demos.hanging_cable import hanging_guess, material_parameters, string_model
-from forms.string import newton_settings, static_equilibrium
+from forms.string import static_equilibrium
 
 parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) cable length"),
@@ -61,7 +61,7 @@ def build(p, comm):
     # horizontal motion would make the static problem singular.
     if p["g"] > 0:
         static_equilibrium(problem, supports=[Support("left", "pinned")])
-    return newton_settings(problem)
+    return problem
 
 
 scene = Scene("crane-manoeuvre", "hanging cable with an end load; its top is pushed along a horizontal rail",

@@ -30,7 +30,7 @@ from rodfem import Load, Problem, Support
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
-from forms.string import MATERIALS, String, map_positions, newton_settings, static_equilibrium
+from forms.string import MATERIALS, String, map_positions, static_equilibrium
 
 
 # ## Parameters shared by the string scenes
@@ -85,7 +85,7 @@ def build(p, comm):
     if p["vy0"] != 0:
         problem.space.assign(problem.x0, "v", lambda x: np.vstack([0 * x[0], p["vy0"] * x[0] / p["L"], 0 * x[0]]))
         problem.x1.x.array[:] = problem.x0.x.array
-    return newton_settings(problem)
+    return problem
 
 
 scene = Scene("hanging-cable", "hyperelastic string pinned at the top, swinging under gravity from a tilt angle",

@@ -33,7 +33,7 @@ from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
 from demos.hanging_cable import material_parameters, string_model
-from forms.string import MATERIALS, newton_settings
+from forms.string import MATERIALS
 
 parameters = common(n_elements=100, dt=2e-3, t_end=0.16, integrator="discrete-gradient", frames=20) + \
     material_parameters(material="kirchhoff", EA=100.0) + [
@@ -73,7 +73,7 @@ def build(p, comm):
     problem = Problem(string_model(p), p["L"], p["n_elements"], initial=initial,
                       supports=[Support("left", "pinned"), Support("right", "pinned")],
                       integrator=p["integrator"], comm=comm)
-    return newton_settings(problem)
+    return problem
 
 
 def reference(p):

@@ -39,9 +39,9 @@ The coupling terms cancel and
     H(x_{n+1}) - H(x_n) = int rhoA (v_{n+1}-v_n).v_m + [W(C_{n+1}) - W(C_n)] ds + ... = h y.u
 
 exactly (to solver tolerance) for ANY W: grad_bar W (C_{n+1} - C_n) =
-W(C_{n+1}) - W(C_n) is Gonzalez' property (`discrete_gradient` below: the
-difference quotient, with a third-order Taylor fall-back where
-|C_{n+1} - C_n| <= DG_THRESHOLD = 1e-3).  With the midpoint rule
+W(C_{n+1}) - W(C_n) is Gonzalez' property (`step.effort` of the engine,
+rodfem/integrators.py: for a scalar C the difference quotient, with a
+third-order Taylor fall-back where |C_{n+1} - C_n| <= 1e-3).  With the midpoint rule
 S = 2 W'(C_m) (`step.effort`) the balance is exact only for W quadratic in
 C (kirchhoff); its error per unit length is W'''(C_m) dC^3 / 24.
 
@@ -63,56 +63,6 @@ from rodfem.newton import Newton
 from rodfem.ports import ENDS
 
 from forms.string_materials import MATERIALS, Material  # noqa: F401  (re-exported)
-
-
-DG_THRESHOLD = 1e-3
-
-# Newton for string problems: besides the engine's tests |F| <= 1e-10 or
-# |F| <= 1e-12 |F_0|, stop when the Newton update is at round-off,
-# |dx| <= 1e-14 |x|.  Why: the tension is computed from C ~ 1, so the residual
-# carries round-off ~ eps EA; for a stiff cable (EA = 1e7) it stalls at ~2e-9
-# with x already converged to the last digit (the update then is ~1e-16 |x|).
-# Soft cables stop on |F| as before.
-NEWTON_OPTIONS = {"snes_stol": 1e-14}
-
-
-def newton_settings(problem):
-    """Apply NEWTON_OPTIONS to this problem's SNES (not through the global PETSc options
-    database, where they would leak into every later Problem of the process); a nonzero
-    value given by the user (PETSC_OPTIONS="-rodfem_snes_stol ...") wins over ours, the
-    engine's default 0 does not."""
-    from petsc4py import PETSc
-    if PETSc.Options().getReal("rodfem_snes_stol", 0.0) == 0.0:
-        problem.newton.snes.setTolerances(stol=NEWTON_OPTIONS["snes_stol"])
-    return problem
-
-
-def discrete_gradient(W, C0, C1, threshold=DG_THRESHOLD):
-    """Gonzalez' discrete gradient of a scalar W: grad_bar W (C1 - C0) = W(C1) - W(C0) exactly.
-
-        grad_bar W = (W(C1) - W(C0)) / (C1 - C0)              if |C1 - C0| >  threshold
-                   = W'(C_m) + W'''(C_m) (C1 - C0)^2 / 24       otherwise (C_m = (C0 + C1)/2)
-
-    Why a corrected fall-back and threshold 1e-3 (C is dimensionless): the
-    quotient carries the round-off of W(C1) - W(C0), about 2 eps |W| / |dC|
-    in the stress.  With the engine's plain midpoint fall-back below 1e-6
-    (rodfem/integrators.py) that is up to ~1e-10 |W|: a residual floor
-    that keeps Newton above its absolute tolerance 1e-10 (observed with the
-    logarithmic law at W ~ 1: the residual stalls at 3e-10..1e-9).  The
-    Taylor fall-back is the quotient expanded about C_m; its energy error is
-    |W^(5)| |dC|^5 / 1920 <= 5e-19 |W^(5)| per unit length, so the switch can
-    sit at 1e-3, where the quotient's round-off is <= 5e-13 |W|.  (The
-    authors' code uses the plain midpoint derivative below 1e-4, an energy
-    error up to |W'''| 1e-12 / 24.)  Both branches are safe to evaluate:
-    the quotient's denominator is replaced by 1 where it is not used.
-    """
-    Cm = ufl.variable(0.5 * (C0 + C1))
-    W1 = ufl.diff(W(Cm), Cm)
-    W3 = ufl.diff(ufl.diff(W1, Cm), Cm)
-    dC = C1 - C0
-    big = ufl.gt(abs(dC), threshold)
-    quotient = (W(C1) - W(C0)) / ufl.conditional(big, dC, 1.0)
-    return ufl.conditional(big, quotient, W1 + W3 * dC ** 2 / 24)
 
 
 class String:
@@ -170,11 +120,7 @@ class String:
         dom = dx.ufl_domain()
         dr, dv, dC = test["r"], test["v"], test["C"]
         rs, v = step.mid("r").dx(0), step.mid("v")
-        W = (lambda C: self.W(C, dom))
-        if step.rule == "discrete-gradient":
-            Wbar = discrete_gradient(W, step.x0["C"], step.x1["C"])
-        else:
-            (Wbar,) = step.effort(W, ["C"])
+        (Wbar,) = step.effort(lambda C: self.W(C, dom), ["C"])
         S = 2 * Wbar
         F = (ufl.inner(step.rate("r") - v, dr)
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
@@ -248,13 +194,8 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
             sub = Vr if not comp else Vr.sub(int(comp))
             dofs = fem.locate_dofs_topological(sub, 0, problem.facets[sup.end])
             bcs.append(fem.dirichletbc(r0, dofs))
-    # Stopping on the step size too: the residual carries round-off of order
-    # eps EA (the tension is computed from C - 1), which is above an absolute
-    # 1e-10 for a stiff cable (EA = 1e7: the residual stalls near 1e-8) while
-    # the position is converged to round-off.
-    settings = {**NEWTON_OPTIONS, **(options or {})}
     newton = Newton(compat.form(F), compat.form(ufl.derivative(F, r)), r, bcs,
-                    options=settings, prefix="rodfem_static_")
+                    options=options, prefix="rodfem_static_")
     solve = newton.solve(0, t)
     problem.x0.x.array[rdofs] = r.x.array
     S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))

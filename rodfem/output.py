@@ -12,7 +12,6 @@ import os
 import xml.etree.ElementTree as ET
 
 import numpy as np
-from mpi4py import MPI
 
 from . import compat
 
