@@ -24,6 +24,12 @@ default of its examples).
 Reference (for both tools): rodfem's run refined far beyond both sweeps (see
 ``rodfem study``, n_elements = 4x the finest, dt = 1/4 of the smallest).
 Error: |tip(t_end) - tip_ref(t_end)| / max_t |tip_ref(t) - tip_ref(0)|.
+Energy drift (PyElastica; only once the loads are off): max |H(t) - H(t_0)| /
+E_scale, H with the gravity potential, E_scale = max |H| of rodfem's run of
+the scene (kinetic + strain energy).  A PyElastica run is "stable" if it
+reaches t_end with finite positions within 10 L of the start AND an energy
+drift below 1 (else "energy blow-up") (rodfem's exact
+discrete balance is in its own summary: ~1e-12).
 Wall time: the time loop only (PyElastica after numba compilation, rodfem
 after form compilation), the best of `repeats` runs.
 
@@ -83,7 +89,7 @@ def explicit_dt(props, n):
     return min(min(h / ci for ci in c), 2 / math.sqrt(props["GA"] / props["rhoI"]))
 
 
-def elastica_run(cfg, n, dt, t_end, samples=100):
+def elastica_run(cfg, n, dt, t_end, samples=100, energy_scale=None):
     """One PyElastica run; returns dict(status, tip, wall, steps, energy drift after loads)."""
     import elastica as ea
     pr = cfg["props"]
@@ -138,11 +144,11 @@ def elastica_run(cfg, n, dt, t_end, samples=100):
     limit = 10 * L + np.max(np.abs(rod.position_collection))
 
     def energy():
-        H = sum(float(f()) for f in (rod.compute_translational_energy, rod.compute_rotational_energy,
+        """(H, kinetic + strain energy); H includes the lumped gravity potential."""
+        E = sum(float(f()) for f in (rod.compute_translational_energy, rod.compute_rotational_energy,
                                      rod.compute_bending_energy, rod.compute_shear_energy))
-        if cfg["gravity"]:
-            H += float(np.sum(rod.mass * cfg["gravity"] * rod.position_collection[1]))
-        return H
+        V = float(np.sum(rod.mass * cfg["gravity"] * rod.position_collection[1])) if cfg["gravity"] else 0.0
+        return E + V, E
 
     H_after, t0, status = [], time.perf_counter(), "stable"
     for k in range(steps):
@@ -157,9 +163,11 @@ def elastica_run(cfg, n, dt, t_end, samples=100):
     wall = time.perf_counter() - t0
     tip = rod.position_collection[:2, -1].copy()
     drift = None
-    if len(H_after) > 1 and status == "stable":
-        Ha = np.array(H_after)
-        drift = float(np.max(np.abs(Ha - Ha[0])) / max(abs(Ha[0]), 1e-300))
+    if len(H_after) > 1 and status == "stable":  # (blown-up runs end early: no drift)
+        Ha, Ea = np.array(H_after).T
+        drift = float(np.max(np.abs(Ha - Ha[0])) / (energy_scale or max(np.max(np.abs(Ea)), 1e-300)))
+        if energy_scale and drift > 1:
+            status = "energy blow-up (|H - H0| > the scene's energy scale)"
     return dict(status=status, tip=tip, wall=wall, steps=k + 1, drift=drift)
 
 
@@ -209,6 +217,8 @@ def compare(name, quick, repeats):
                       elements=cfg["rodfem_elements"][:3] if quick else cfg["rodfem_elements"],
                       repeats=repeats, quiet=True)
     t_end = study["parameters"]["t_end"]
+    from rodfem.driver import run_scene
+    energy_scale = run_scene(name, dict(cfg["overrides"], frames=1))[1]["max_abs_H"]
     rodfem_rows = [dict(tool="rodfem", scene=name, path=r["path"], n_elements=r["n_elements"], dt=r["dt"],
                         status=r["status"], error=r["error"], wall_time_s=r.get("wall_time_s"))
                    for r in study["rows"] if r["path"] != "reference"]
@@ -225,11 +235,11 @@ def compare(name, quick, repeats):
             dte = explicit_dt(cfg["props"], n)
             for f in factors:
                 dt = t_end / math.ceil(t_end / (f * dte))
-                run = elastica_run(cfg, n, dt, t_end)
+                run = elastica_run(cfg, n, dt, t_end, energy_scale=energy_scale)
                 if run["status"] == "stable":
                     best = run
                     for _ in range(repeats - 1):
-                        again = elastica_run(cfg, n, dt, t_end)
+                        again = elastica_run(cfg, n, dt, t_end, energy_scale=energy_scale)
                         best = again if again["wall"] < best["wall"] else best
                     stable_dt[n] = dt
                     rows.append(dict(tool="PyElastica", scene=name, path="largest stable dt", n_elements=n, dt=dt,
@@ -239,11 +249,12 @@ def compare(name, quick, repeats):
                           f"error {rows[-1]['error']:.2e}, wall {best['wall']:.2f} s, drift {best['drift']}", flush=True)
                     break
                 rows.append(dict(tool="PyElastica", scene=name, path="search", n_elements=n, dt=dt,
-                                 dt_over_explicit=dt / dte, status=run["status"], error=None,
-                                 wall_time_s=run["wall"], energy_drift=None))
+                                 dt_over_explicit=dt / dte, status=run["status"],
+                                 error=err_of(run["tip"], study) if np.all(np.isfinite(run["tip"])) else None,
+                                 wall_time_s=run["wall"], energy_drift=run["drift"]))
             if n in stable_dt:   # the time-step error at this n: dt/4
                 dt = stable_dt[n] / 4
-                run = elastica_run(cfg, n, dt, t_end)
+                run = elastica_run(cfg, n, dt, t_end, energy_scale=energy_scale)
                 rows.append(dict(tool="PyElastica", scene=name, path="dt / 4", n_elements=n, dt=dt,
                                  dt_over_explicit=dt / explicit_dt(cfg["props"], n), status=run["status"],
                                  error=err_of(run["tip"], study) if run["status"] == "stable" else None,
@@ -266,7 +277,8 @@ def compare(name, quick, repeats):
 
 
 def time_to(rows, target):
-    ok = [r["wall_time_s"] for r in rows if r.get("error") is not None and r["error"] <= target and r.get("wall_time_s")]
+    ok = [r["wall_time_s"] for r in rows if r.get("error") is not None and r["error"] <= target and r.get("wall_time_s")
+          and r["status"] in ("stable", "completed")]
     return min(ok) if ok else None
 
 
@@ -304,6 +316,8 @@ def write(results, quick):
         lines.append(f"| {name} | rodfem | {' | '.join(fmt(time_to(rf, t)) for t in TARGETS)} | "
                      f"{fmt(best['dt'] if best else None, 'g', '')} (Newton) | {note} |")
         stab = [r for r in pe if r["path"] == "largest stable dt"]
+        if pe and not stab:
+            lines.append(f"| {name} | PyElastica | – | – | – | none | no dt tried was stable (see every run below) |")
         if stab:
             base = stab[0]
             drifts = [r["energy_drift"] for r in stab if r.get("energy_drift") is not None]
