@@ -64,7 +64,8 @@ def build(p, comm):
     directors = (d1, np.array([0.0, 1.0, 0.0]), np.array([-C, 0.0, 1.0]) / np.sqrt(1 + C**2))
     initial = straight((0.0, -R0, 0.0), directors)
     return Problem(rod, LENGTH, p["n_elements"], loads=[end_moment(smooth_ramp(moment, p["t_end"]), "body")],
-                   supports=[Support("left", "clamped")], initial=initial, integrator=p["integrator"], comm=comm, newton_options=NEWTON)
+                   supports=[Support("left", "clamped")], initial=initial, integrator=p["integrator"],
+                   comm=comm, newton_options=NEWTON)
 
 
 def reference(p):

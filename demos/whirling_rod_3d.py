@@ -35,7 +35,8 @@ def build(p, comm):
     a = np.radians(p["tilt"])
     omega = p["Omega0"] * np.array([np.cos(a), 0.0, np.sin(a)])
     initial = straight((-0.5 * p["L"], 0.0, 0.0), np.eye(3), omega=omega)
-    return Problem(rod(p), p["L"], p["n_elements"], initial=initial, integrator=p["integrator"], comm=comm, newton_options=NEWTON)
+    return Problem(rod(p), p["L"], p["n_elements"], initial=initial, integrator=p["integrator"], comm=comm,
+                   newton_options=NEWTON)
 
 
 scene = Scene("whirling-rod-3d", "free rod spinning about a non-principal axis: H and L_x, L_y, L_z conserved",
