@@ -47,14 +47,6 @@ def rod(p):
                                     [p[f"C_M{i}"] for i in (1, 2, 3)])
 
 
-def frame_from_axis(d1, d2_hint=(0.0, 0.0, 1.0)):
-    """An orthonormal (d1, d2, d3) with d1 along `d1` and d2 as close as possible to `d2_hint`."""
-    d1 = np.asarray(d1, float) / np.linalg.norm(d1)
-    d2 = np.asarray(d2_hint, float) - np.dot(d2_hint, d1) * d1
-    d2 /= np.linalg.norm(d2)
-    return d1, d2, np.cross(d1, d2)
-
-
 def straight(start, directors, omega=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)):
     """Initial values of a straight rod r(s) = start + s d1, with the rigid motion v = velocity + omega x r, w_i = omega x d_i."""
     start, omega, velocity = (np.asarray(a, float) for a in (start, omega, velocity))
