@@ -151,6 +151,26 @@ def test_helix_no_locking():
     assert errs[1e4] <= 1.01 * errs[1e1] and errs[1e1] < 0.01 * helix_3d.LENGTH, errs
 
 
+@pytest.mark.parametrize("slenderness", [1e1, 1e2, 1e3, 1e4])
+def test_cantilever_tip_force_no_locking(slenderness):
+    """Linear cantilever, tip force across the axis, square section t = L/slenderness: the tip
+    deflection equals Timoshenko's F (L^3/(3 EI) + L/(GA)) to 1e-6 with 1 and 2 elements at every
+    slenderness (a locking element would give ~ (t/L)^2 of it).  Units with EI = 1, E = 2G:
+    EA = 12 slenderness^2, GA = 5/6 G A = 5 slenderness^2.  The linear ramp makes the
+    load-stepped statics exact in the linear regime (deflection 1e-4 L)."""
+    from rodfem import Load, Problem, Support, ramp
+    from demos._rod3d import straight
+    from forms.cosserat_rod import CosseratRod
+    EI, EA, GA, F = 1.0, 12 * slenderness ** 2, 5 * slenderness ** 2, 3e-4
+    exact = -F * (1 / (3 * EI) + 1 / GA)
+    for n in (1, 2):
+        rod = CosseratRod(0.0, [0.0, 0.0, 0.0], [1 / EA, 1 / GA, 1 / GA], [1 / EI, 1 / EI, 1 / EI])
+        P = Problem(rod, 1.0, n, loads=[Load("v", ramp([0.0, 0.0, -F], 1.0), "right")],
+                    supports=[Support("left", "clamped")], initial=straight((0, 0, 0), np.eye(3)), comm=COMM)
+        tip = run(P, 0.5, 1.0).rows[-1]["tip_z"]
+        assert abs(tip - exact) <= 1e-6 * abs(exact), (n, tip, exact)
+
+
 def test_helix_inextensible_shear_rigid():
     """Kirchhoff rod (C_N = 0): the same helix, run without code change."""
     P, p = build(helix_3d.scene, n_elements=16, dt=1 / 32, slenderness=1e3, constraint="kirchhoff")
