@@ -53,26 +53,30 @@ class Newton:
         self.b = compat.create_vector(F)
         self.A = fpetsc.create_matrix(J)
         self.xv = compat.petsc_vec(x)
-        settings = dict(DEFAULTS)
-        settings["pc_factor_mat_solver_type"] = "petsc" if comm.size == 1 else "mumps"
-        settings.update(options or {})
+        self.settings = dict(DEFAULTS)
+        self.settings["pc_factor_mat_solver_type"] = "petsc" if comm.size == 1 else "mumps"
+        self.settings.update(options or {})
+        self.prefix = prefix
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
-        # Our settings go through the options database only for this set-up (the
-        # user's own -rodfem_* options win), then are removed so that they do not
-        # leak into the next Problem of the process.
+        self._configure(self.settings)
+        self._work = self.xv.duplicate()
+
+    def _configure(self, settings):
+        """Apply `settings` through the options database for this SNES only: the user's own
+        -rodfem_* options win, and ours are removed again so that they do not leak into the
+        next Problem of the process."""
         opts, ours = PETSc.Options(), []
         for key, value in settings.items():
-            if not opts.hasName(prefix + key):
-                opts[prefix + key] = value
-                ours.append(prefix + key)
+            if not opts.hasName(self.prefix + key):
+                opts[self.prefix + key] = value
+                ours.append(self.prefix + key)
         self.snes.setFromOptions()
         self.snes.getKSP().setFromOptions()
         for name in ours:
             opts.delValue(name)
-        self._work = self.xv.duplicate()
 
     def _residual(self, snes, xin, b):
         xin.copy(self.xv)
@@ -94,19 +98,37 @@ class Newton:
         return self.snes.getKSP().getPC().getFactorSolverType()
 
     def solve(self, step, t):
-        """Solve in place for x; raise NewtonFailure (never return a NaN state)."""
+        """Solve in place for x; raise NewtonFailure (never return a NaN state).
+
+        A chord Newton (``snes_lag_jacobian`` > 1: the Jacobian and its LU reused over
+        iterations) that fails repeats the step with a fresh Jacobian every iteration.
+        """
         self.xv.copy(self._work)
         self.snes.solve(None, self._work)
         reason = self.snes.getConvergedReason()
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
+            self.settings["pc_factor_mat_solver_type"] = "superlu" if self.snes.comm.size == 1 else "mumps"
             pc = self.snes.getKSP().getPC()
             pc.reset()
-            pc.setFactorSolverType("superlu" if self.snes.comm.size == 1 else "mumps")
+            pc.setFactorSolverType(self.settings["pc_factor_mat_solver_type"])
             return self.solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
         if reason <= 0 or res != res:
+            if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
+                return self._solve_full_newton(step, t)
             raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
         self._work.copy(self.xv)
         self.xv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         return Solve(its, res)
+
+    def _solve_full_newton(self, step, t):
+        chord = self.settings
+        self.settings = {**chord, "snes_lag_jacobian": 1}
+        self._configure(self.settings)
+        try:
+            return self.solve(step, t)
+        finally:
+            chord["pc_factor_mat_solver_type"] = self.settings["pc_factor_mat_solver_type"]
+            self.settings = chord
+            self._configure(chord)
