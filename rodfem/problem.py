@@ -1,8 +1,8 @@
 """A scene made concrete: mesh, state space, step residual, ports and observables.
 
 Only what the scene uses is assembled: the loads it lists, the supports it
-lists, the tip only if an end is free, momentum maps only if nothing is
-supported.
+lists, the tip only if the end s = L is free (else the mean position
+(1/L) int r ds), momentum maps only if nothing is supported.
 """
 import numpy as np
 import ufl
@@ -91,9 +91,13 @@ class Problem:
         obs = {}
         supported = {sup.end for sup in self.supports}
         pos = X[self.model.position]
+        axes = "xyz"[: pos.ufl_shape[0]]
         if "right" not in supported:
-            for i, c in enumerate("xyz"[: pos.ufl_shape[0]]):
+            for i, c in enumerate(axes):
                 obs[f"tip_{c}"] = pos[i] * self.ds(ENDS["right"])
+        else:  # no free end: the mean position (1/L) int r ds shows how the body moves
+            for i, c in enumerate(axes):
+                obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             for name, density in self.model.momentum(X).items():
                 obs[name] = density * self.dx

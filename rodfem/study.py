@@ -26,8 +26,9 @@ Error measure (stated in study.json, study.md and on stdout)
     error = |q_h(t_end) - q_ref(t_end)|_2 / scale
 
 with q the compared history columns: the reference's columns (analytic), or
-else the tip_* columns, or else every observable of the run.  scale is the
-reference's "scale" (analytic), else the largest excursion
+else the tip_* columns, or else the mean_* columns (no free end), or else
+every observable of the run.  scale is the reference's "scale" (analytic),
+else the largest excursion
 max_t |q_ref(t) - q_ref(0)| of the reference run (so a relative error is
 relative to how far the compared point moves).  With a reference run also
 ``error_max_t`` = max over the run's time levels of |q_h(t) - q_ref(t)| / scale.
@@ -129,7 +130,7 @@ def compared_columns(row, analytic=None):
     if analytic:
         return [k for k in analytic if k != "scale"]
     tips = [k for k in row if k.startswith("tip_")]
-    return tips or [k for k in row if k not in BOOKKEEPING]
+    return tips or [k for k in row if k.startswith("mean_")] or [k for k in row if k not in BOOKKEEPING]
 
 
 def _history(result, cols):
