@@ -2,10 +2,9 @@
 
 For 16, 128 and 1024 elements: dofs, ms per step, Newton iterations per step,
 and the split into Jacobian assembly (J), residual assembly (F) and the rest
-(LU factorisation + solve, energy and observables), for the default full
-Newton and for a chord-Newton that reuses the Jacobian over 8 iterations
-and lets PETSc's LU reorder for a nonzero diagonal (see FAST; the
-converged step is the same, only the iteration differs).  Then the largest
+(LU factorisation + solve, energy and observables), for the Newton variants
+in VARIANTS (the converged step is the same, only the iteration differs).
+Then the largest
 dt at which flying-spaghetti-3d (10 elements, t_end = 15) still converges.
 
 Writes bench_cosserat_rod.md and bench_cosserat_rod.csv next to this file.
@@ -25,27 +24,29 @@ from rodfem.newton import NewtonFailure
 from demos import flying_spaghetti_3d
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-# "fast": reuse the Jacobian (and its LU) over 8 Newton iterations, across
-# steps, and let PETSc's native LU reorder for a nonzero diagonal instead of
-# falling back to MUMPS.  NOT the default: that reordering crashed PETSc 3.18
-# (SEGV in MatLUFactorNumeric) on the inextensible rod (C_N1 = 0).
-FAST = {"snes_lag_jacobian": 8, "snes_lag_jacobian_persists": True, "pc_factor_nonzeros_along_diagonal": 1e-12}
+# Newton variants.  "default" is what the 3D scenes use (demos/_rod3d.py NEWTON:
+# chord Newton reusing the Jacobian and its LU over 8 iterations, across steps,
+# full-Newton retry on failure; SuperLU after PETSc's LU meets the zero pivots of
+# the multiplier rows).  "full": a fresh Jacobian every iteration.  "chord +
+# reordered LU": the default plus PETSc's own LU reordered for a nonzero diagonal
+# (faster, but it crashed PETSc 3.18 in MatLUFactorNumeric on the inextensible
+# rod, C_N1 = 0, so it is not the default).
+VARIANTS = {"default (chord lag 8)": {},
+            "full Newton": {"snes_lag_jacobian": 1},
+            "chord + reordered LU": {"pc_factor_nonzeros_along_diagonal": 1e-12, "pc_factor_mat_solver_type": "petsc"}}
 
 
 def set_options(opts):
     db = PETSc.Options()
-    for key in FAST:
-        if db.hasName("rodfem_" + key):
-            db.delValue("rodfem_" + key)
-    for key in ("pc_factor_mat_solver_type",):   # Newton sets it; the fallback may have switched it
+    for key in {k for v in VARIANTS.values() for k in v}:
         if db.hasName("rodfem_" + key):
             db.delValue("rodfem_" + key)
     for key, value in opts.items():
         db["rodfem_" + key] = value
 
 
-def timed_run(n_elements, steps, dt=0.1, newton=None):
-    set_options(newton or {})
+def timed_run(n_elements, steps, dt=0.1, variant="default (chord lag 8)"):
+    set_options(VARIANTS[variant])
     scene = flying_spaghetti_3d.scene
     p = scene.values({"n_elements": n_elements, "variant": "spatial", "dt": dt, "t_end": steps * dt})
     P = scene.build(p, MPI.COMM_WORLD)
@@ -68,13 +69,13 @@ def timed_run(n_elements, steps, dt=0.1, newton=None):
     n = res.steps
     total = 1e3 * res.wall_time / n
     J_ms, F_ms = 1e3 * T["J"] / n, 1e3 * T["F"] / n
-    return {"n_elements": n_elements, "dofs": P.dofs, "steps": n, "newton": "fast (chord lag 8, reordered LU)" if newton else "full (default)",
+    return {"n_elements": n_elements, "dofs": P.dofs, "steps": n, "newton": variant,
             "ms_per_step": round(total, 2), "newton_its": round(float(res.column("newton_its")[1:].mean()), 2),
             "J_ms": round(J_ms, 2), "F_ms": round(F_ms, 2), "solve_and_rest_ms": round(total - J_ms - F_ms, 2),
             "linear_solver": nw.linear_solver}
 
 
-def largest_dt(dts=(0.1, 0.25, 0.5, 1.25, 2.5)):
+def largest_dt(dts=(0.1, 0.25, 0.375, 0.5, 0.75, 1.25, 2.5)):
     set_options({})
     out = []
     for dt in dts:
@@ -91,9 +92,10 @@ def largest_dt(dts=(0.1, 0.25, 0.5, 1.25, 2.5)):
 def main():
     rows = []
     for n, steps in ((16, 20), (128, 10), (1024, 3)):
-        for newton in (None, FAST):
-            rows.append(timed_run(n, steps, newton=newton))
+        for variant in VARIANTS:
+            rows.append(timed_run(n, steps, variant=variant))
             print(rows[-1], flush=True)
+    set_options({})
     dts = largest_dt()
     print(dts, flush=True)
     with open(os.path.join(HERE, "bench_cosserat_rod.csv"), "w", newline="") as f:
@@ -102,15 +104,15 @@ def main():
         w.writerows(rows)
     with open(os.path.join(HERE, "bench_cosserat_rod.md"), "w") as f:
         f.write("# 3D Cosserat rod: cost per time step (serial, flying-spaghetti-3d spatial, dt = 0.1)\n\n")
-        f.write("Machine: 2 shared cores (other jobs running). full = default Newton; the native LU meets zero pivots "
-                "(multiplier rows) and the engine falls back to MUMPS (column solver). fast: see FAST in the script.\n"
+        f.write("Serial, 2-core machine. Newton variants: see VARIANTS in the script (default = the scenes' chord "
+                "Newton; PETSc's LU meets zero pivots on the multiplier rows and the engine switches to SuperLU).\n"
                 "J = Jacobian assembly, F = residual assembly, rest = LU factorisation/solve + energy + observables.\n\n")
         f.write("| elements | dofs | Newton | ms/step | Newton its/step | J ms | F ms | LU + rest ms | solver |\n")
         f.write("|---|---|---|---|---|---|---|---|---|\n")
         for r in rows:
             f.write(f"| {r['n_elements']} | {r['dofs']} | {r['newton']} | {r['ms_per_step']} | {r['newton_its']} | "
                     f"{r['J_ms']} | {r['F_ms']} | {r['solve_and_rest_ms']} | {r['linear_solver']} |\n")
-        f.write("\n## Largest dt (flying-spaghetti-3d, planar variant, 10 elements, t_end = 15, full Newton)\n\n")
+        f.write("\n## Largest dt (flying-spaghetti-3d, planar variant, 10 elements, t_end = 15, scene default Newton)\n\n")
         f.write("| dt | result | Newton its/step |\n|---|---|---|\n")
         for dt, status, its in dts:
             f.write(f"| {dt} | {status} | {its:.2f} |\n")

@@ -62,7 +62,7 @@ class Newton:
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
         self._configure(self.settings)
-        self._work = self.xv.duplicate()
+        self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
@@ -103,7 +103,11 @@ class Newton:
         A chord Newton (``snes_lag_jacobian`` > 1: the Jacobian and its LU reused over
         iterations) that fails repeats the step with a fresh Jacobian every iteration.
         """
-        self.xv.copy(self._work)
+        self.xv.copy(self._start)  # the initial guess (the callbacks overwrite x with each iterate)
+        return self._solve(step, t)
+
+    def _solve(self, step, t):
+        self._start.copy(self._work)
         self.snes.solve(None, self._work)
         reason = self.snes.getConvergedReason()
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
@@ -111,7 +115,7 @@ class Newton:
             pc = self.snes.getKSP().getPC()
             pc.reset()
             pc.setFactorSolverType(self.settings["pc_factor_mat_solver_type"])
-            return self.solve(step, t)
+            return self._solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
         if reason <= 0 or res != res:
@@ -127,7 +131,7 @@ class Newton:
         self.settings = {**chord, "snes_lag_jacobian": 1}
         self._configure(self.settings)
         try:
-            return self.solve(step, t)
+            return self._solve(step, t)
         finally:
             chord["pc_factor_mat_solver_type"] = self.settings["pc_factor_mat_solver_type"]
             self.settings = chord
