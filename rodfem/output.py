@@ -151,6 +151,13 @@ def plot_shapes(path, snapshots, max_shapes=16):
         ax.plot(*[p[:, k] for k in range(dim)], color=c, lw=1.5, label=f"t = {t:.3g}" if j in (0, len(idx) - 1) else None)
     if dim == 2:
         ax.set_aspect("equal", adjustable="datalim")
+    else:  # equal scales on the three axes: a cube around the swept region
+        pts = np.concatenate([snapshots[i][1] for i in idx])
+        centre, half = 0.5 * (pts.max(0) + pts.min(0)), 0.5 * np.max(np.ptp(pts, axis=0)) or 1.0
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_zlim(centre[2] - half, centre[2] + half)
+        ax.set_zlabel("z")
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.legend()
