@@ -86,6 +86,8 @@ def parser():
 
 def main(argv=None):
     args = parser().parse_args(argv)
+    import logging
+    logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
         args.func(args)
     except ParameterError as e:
