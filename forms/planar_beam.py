@@ -27,6 +27,7 @@ H_{n+1} - H_n = h y.u exactly.
 """
 import ufl
 
+from rodfem.materials import ParameterSet, material
 from rodfem.model import Field
 
 S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])
@@ -44,26 +45,27 @@ def cross(a, b):
     return a[0] * b[1] - a[1] * b[0]
 
 
-# -- materials: W(Gamma, kappa) ------------------------------------------------
+# -- materials: W(Gamma, kappa; parameters) ----------------------------------------
+# One function each; `quadratic(EA=..., GA=..., EI=...)` makes the Material
+# (rodfem/materials.py: the parameters become run-time constants, positive
+# except the reference curvature kappa0, which may also be a UFL expression).
 
-def quadratic(EA, GA, EI, kappa0=0.0):
+@material(strains=2, signed=("kappa0",))
+def quadratic(Gamma, kappa, EA, GA, EI, kappa0=0.0):
     """W = 1/2 EA Gamma_1^2 + 1/2 GA Gamma_2^2 + 1/2 EI (kappa - kappa0)^2 (Hooke)."""
-    def W(Gamma, kappa):
-        return 0.5 * EA * Gamma[0] ** 2 + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
-    return W
+    return 0.5 * EA * Gamma[0] ** 2 + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
 
 
-def log_axial(EA, GA, EI, kappa0=0.0):
+@material(strains=2, signed=("kappa0",))
+def log_axial(Gamma, kappa, EA, GA, EI, kappa0=0.0):
     """Hyperelastic in stretch lambda = 1 + Gamma_1:  W = EA (lambda - 1 - ln lambda) + ...
 
     Same small-strain stiffness as `quadratic`, but W -> infinity as lambda -> 0
     (no compression through zero length).  Non-quadratic: use the
     discrete-gradient integrator for an exact energy balance.
     """
-    def W(Gamma, kappa):
-        lam = 1.0 + Gamma[0]
-        return EA * (lam - 1.0 - ufl.ln(lam)) + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
-    return W
+    lam = 1.0 + Gamma[0]
+    return EA * (lam - 1.0 - ufl.ln(lam)) + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
 
 
 # -- the model -------------------------------------------------------------------
@@ -80,7 +82,8 @@ class PlanarBeam:
     def __init__(self, rhoA, rhoI, energy, degree=1):
         if degree < 1:
             raise ValueError(f"degree must be >= 1 (got {degree})")
-        self.rhoA, self.rhoI, self.energy, self.degree = rhoA, rhoI, energy, degree
+        self.energy, self.degree = energy, degree
+        self.densities = ParameterSet(rhoA=rhoA, rhoI=rhoI)  # run-time constants: no recompiling
         k = degree
         self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
@@ -88,7 +91,8 @@ class PlanarBeam:
 
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa) ds."""
-        return (0.5 * self.rhoA * ufl.inner(x["v"], x["v"]) + 0.5 * self.rhoI * x["omega"] ** 2
+        c = self.densities.on(dx.ufl_domain())
+        return (0.5 * c["rhoA"] * ufl.inner(x["v"], x["v"]) + 0.5 * c["rhoI"] * x["omega"] ** 2
                 + self.energy(x["Gamma"], x["kappa"])) * dx
 
     def residual(self, step, test, dx, ds):
@@ -98,9 +102,10 @@ class PlanarBeam:
         A = rotation(step.mid("phi"))
         N, M = step.effort(self.energy, ["Gamma", "kappa"])
         n = A * N
+        c = self.densities.on(dx.ufl_domain())
         return (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
-                + self.rhoA * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
-                + self.rhoI * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
+                + c["rhoA"] * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
+                + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
                 + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
                 + (step.rate("kappa") - w.dx(0)) * dk) * dx
 
@@ -110,5 +115,6 @@ class PlanarBeam:
 
     def momentum(self, x):
         """Linear momentum p = rhoA v and angular momentum L_z = rhoA r x v + rhoI omega (densities)."""
-        return {"p_x": self.rhoA * x["v"][0], "p_y": self.rhoA * x["v"][1],
-                "L_z": self.rhoA * cross(x["r"], x["v"]) + self.rhoI * x["omega"]}
+        c = self.densities.on(ufl.domain.extract_unique_domain(x["v"]))
+        return {"p_x": c["rhoA"] * x["v"][0], "p_y": c["rhoA"] * x["v"][1],
+                "L_z": c["rhoA"] * cross(x["r"], x["v"]) + c["rhoI"] * x["omega"]}

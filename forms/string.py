@@ -58,6 +58,7 @@ import ufl
 from dolfinx import fem
 
 from rodfem import compat
+from rodfem.materials import ParameterSet
 from rodfem.model import Field
 from rodfem.newton import Newton
 from rodfem.ports import ENDS
@@ -84,23 +85,16 @@ class String:
         for end, m in self.end_masses.items():
             if end not in ENDS or not (np.isfinite(m) and m >= 0):
                 raise ValueError(f"end_masses: need 'left'/'right' -> mass >= 0 (got {end!r}: {m!r})")
-        self._constants = {}
+        # The numbers enter the forms as fem.Constants (one set per mesh, like the
+        # material's parameters), so a new EA, rhoA or end mass does not recompile.
+        self.parameters = ParameterSet(rhoA=self.rhoA, **{"m_" + e: m for e, m in self.end_masses.items()})
 
-    # The numbers enter the forms as fem.Constants (one set per mesh), so a
-    # new EA, rhoA or end mass does not trigger a new JIT compilation.
     def constants(self, domain):
-        key = id(domain)
-        if key not in self._constants:
-            c = {name: fem.Constant(domain, float(v)) for name, v in self.material.params.items()}
-            c["rhoA"] = fem.Constant(domain, self.rhoA)
-            for end, m in self.end_masses.items():
-                c["m_" + end] = fem.Constant(domain, m)
-            self._constants[key] = c
-        return self._constants[key]
+        return self.parameters.on(domain)
 
-    def W(self, C, domain):
-        c = self.constants(domain)
-        return self.material(C, {k: c[k] for k in self.material.params})
+    def W(self, C, domain=None):
+        """W(C), the material's stored energy (its parameters are constants on C's mesh)."""
+        return self.material(C)
 
     def _lumped(self, ds, density):
         """sum_ends m_end * density at s = 0, L (only ends with a mass)."""

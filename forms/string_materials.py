@@ -15,34 +15,22 @@ parameters, decorated with `@material` -- `biot` below is the example:
         # docstring: the formula, W = EA/2 (sqrt(C) - 1)^2, N = EA (lambda - 1)
         return EA / 2 * (ufl.sqrt(C) - 1) ** 2
 
-`biot(EA=10.0)` then is a `Material` the string model takes; every
-parameter must be a positive number (checked: one-line ValueError), and the
-parameters enter the compiled forms as run-time constants, so changing a
-value does not recompile.  Add the name to MATERIALS to make it selectable
+`biot(EA=10.0)` then is a `Material` (rodfem/materials.py) the string model
+takes; every parameter must be a positive number (checked: one-line
+ValueError), and the parameters enter the compiled forms as run-time
+constants, so changing a value does not recompile.  Add the name to MATERIALS to make it selectable
 in the scenes (``--set material=biot``) and covered by the per-material
 tests.  Any W works with the discrete-gradient integrator: the energy
 balance is exact whatever W is.  Keep W''(1) = EA/4 so that EA is the
 small-strain stiffness, and state where W is defined (e.g. C > 0).
 """
-import inspect
-import math
-
 import ufl
 
+from rodfem import materials
 
-class Material:
-    """A stored energy W(C; params) with its (positive) parameter values."""
 
-    def __init__(self, name, function, params):
-        self.name, self.function, self.params = name, function, dict(params)
-        for key, value in self.params.items():
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"material {name}: parameter {key} must be a positive number (got {value!r})")
-
-    def __call__(self, C, constants=None):
-        """W(C) as UFL; `constants` (dict name -> UFL constant) replaces the numbers if given."""
-        values = constants if constants is not None else self.params
-        return self.function(C, **values)
+class Material(materials.Material):
+    """A string material W(C; params), with its response for numbers C."""
 
     def stress(self, C):
         """S = 2 W'(C) as a float, for a number C (UFL evaluates the derivative)."""
@@ -58,23 +46,10 @@ class Material:
         """N = S lambda = 2 W'(lambda^2) lambda for a uniform stretch lambda."""
         return self.stress(stretch ** 2) * stretch
 
-    def __repr__(self):
-        return f"{self.name}({', '.join(f'{k}={v:g}' for k, v in self.params.items())})"
-
 
 def material(function):
-    """Decorator: turn W(C, **params) into a factory params -> Material."""
-    names = list(inspect.signature(function).parameters)[1:]
-
-    def factory(*args, **kwargs):
-        bound = inspect.signature(function).bind(None, *args, **kwargs)
-        bound.apply_defaults()
-        params = {k: bound.arguments[k] for k in names}
-        return Material(function.__name__, function, params)
-    factory.__name__ = function.__name__
-    factory.__doc__ = function.__doc__
-    factory.energy_function = function
-    return factory
+    """Decorator: W(C, **params) -> a factory params -> Material (all parameters positive)."""
+    return materials.material(function, cls=Material)
 
 
 # -- the materials ---------------------------------------------------------------
