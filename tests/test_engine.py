@@ -38,3 +38,30 @@ def test_problem_options_do_not_leak_into_the_next_problem():
     b, _ = spaghetti()
     assert a.newton.snes.getTolerances()[3] == 3
     assert b.newton.snes.getTolerances()[3] == 25
+
+
+def test_material_values_are_constants_not_compiled_in():
+    """A new stiffness or density compiles nothing: the forms have the same JIT signature
+    (and another scene's forms do not)."""
+    import cffi
+    ffi = cffi.FFI()
+
+    def signature(form):
+        return ffi.string(form.ufcx_form.signature).decode()
+    scene = load("cantilever-2d")
+    a = scene.build(scene.values({"EA": 1e6, "rhoA": 1.0}), MPI.COMM_WORLD)
+    b = scene.build(scene.values({"EA": 3e6, "rhoA": 2.0}), MPI.COMM_WORLD)
+    c, _ = spaghetti()
+    assert signature(a.F) == signature(b.F) and signature(a.J) == signature(b.J)
+    assert signature(a.F) != signature(c.F)
+
+
+def test_material_parameter_checks():
+    import pytest
+    import ufl
+    from forms.planar_beam import quadratic
+    with pytest.raises(ValueError, match="parameter EI must be a positive number"):
+        quadratic(EA=1.0, GA=1.0, EI=0.0)
+    quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=-0.5)                       # signed: any number
+    x = ufl.SpatialCoordinate(ufl.Mesh(ufl.VectorElement("Lagrange", ufl.interval, 1)))
+    quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=0.1 * x[0])                 # or a UFL expression
