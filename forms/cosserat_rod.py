@@ -75,6 +75,7 @@ moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
 import numpy as np
 import ufl
 
+from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
 DIRECTORS = ("d1", "d2", "d3")
@@ -164,23 +165,33 @@ class CosseratRod:
         self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))
         if self.C_N.shape != (3,) or self.C_M.shape != (3,) or np.any(self.C_N < 0) or np.any(self.C_M < 0):
             raise ValueError("compliances C_N, C_M must be three numbers >= 0 each")
+        # run-time constants of the forms (a new value recompiles nothing)
+        self.parameters = ParameterSet(rhoA=self.rhoA, **{f"m{i + 1}": m for i, m in enumerate(self.masses)},
+                                       **{f"C_N{i + 1}": c for i, c in enumerate(self.C_N)},
+                                       **{f"C_M{i + 1}": c for i, c in enumerate(self.C_M)})
         v3 = (3,)
         self.fields = ([Field(n, "P", 2, v3) for n in ("r", *DIRECTORS, "v", *RATES)]
                        + [Field("N", "DG", 1, v3), Field("M", "DG", 1, v3), Field("lam", "P", 2, (6,))])
 
-    def _diag(self, c):
-        return ufl.as_matrix([[float(c[i]) if i == j else 0.0 for j in range(3)] for i in range(3)])
+    def _constants(self, domain):
+        """(rhoA, director masses m_1..3, C_N, C_M) as UFL constants on `domain`."""
+        c = self.parameters.on(domain)
+        diag = lambda name: ufl.as_matrix([[c[f"{name}{i + 1}"] if i == j else 0.0 for j in range(3)]  # noqa: E731
+                                           for i in range(3)])
+        return c["rhoA"], [c[f"m{i + 1}"] for i in range(3)], diag("C_N"), diag("C_M")
 
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA |v|^2 + 1/2 sum m_i |w_i|^2 + 1/2 N.C_N N + 1/2 M.C_M M ds."""
-        kin = 0.5 * self.rhoA * ufl.inner(x["v"], x["v"])
-        kin += sum(0.5 * float(m) * ufl.inner(x[n], x[n]) for m, n in zip(self.masses, RATES))
-        pot = 0.5 * ufl.inner(x["N"], self._diag(self.C_N) * x["N"]) + 0.5 * ufl.inner(x["M"], self._diag(self.C_M) * x["M"])
+        rhoA, masses, C_N, C_M = self._constants(dx.ufl_domain())
+        kin = 0.5 * rhoA * ufl.inner(x["v"], x["v"])
+        kin += sum(0.5 * m * ufl.inner(x[n], x[n]) for m, n in zip(masses, RATES))
+        pot = 0.5 * ufl.inner(x["N"], C_N * x["N"]) + 0.5 * ufl.inner(x["M"], C_M * x["M"])
         return (kin + pot) * dx
 
     def residual(self, step, test, dx, ds):
         """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, w_m, N_m, M_m, lambda_{n+1})."""
         dxG = gll(dx)
+        rhoA, masses, C_N, C_M = self._constants(dx.ufl_domain())
         r, v = step.mid("r"), step.mid("v")
         d = [step.mid(n) for n in DIRECTORS]
         w = [step.mid(n) for n in RATES]
@@ -191,18 +202,18 @@ class CosseratRod:
         F = sum(ufl.inner(step.rate(q) - step.mid(p), test[q])
                 for q, p in zip(("r", *DIRECTORS), ("v", *RATES))) * dxG
         # balance of linear momentum: rhoA d_t v = d_s(R N)
-        F += (self.rhoA * ufl.inner(step.rate("v"), dv) + ufl.inner(frame(d) * N, dv.dx(0))) * dx
+        F += (rhoA * ufl.inner(step.rate("v"), dv) + ufl.inner(frame(d) * N, dv.dx(0))) * dx
         # director momentum: M_rho d_t v_d = -J_N N - J_M M - G_d^T lambda
-        F += sum(float(m) * ufl.inner(step.rate(n), dwi) + N[i] * ufl.inner(r.dx(0), dwi)
-                 for i, (m, n, dwi) in enumerate(zip(self.masses, RATES, dw))) * dx
+        F += sum(m * ufl.inner(step.rate(n), dwi) + N[i] * ufl.inner(r.dx(0), dwi)
+                 for i, (m, n, dwi) in enumerate(zip(masses, RATES, dw))) * dx
         F += ufl.inner(M, curvature_rate(d, dw)) * dx
         F += ufl.inner(lam, constraint_rate(d, dw)) * dxG
         # orthonormality on velocity level, collocated at the nodes
         F += ufl.inner(constraint_rate(d, w), dlam) * dxG
         # compliance equations in rate form
         gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
-        F += (ufl.inner(self._diag(self.C_N) * step.rate("N") - gamma_rate, dN)
-              + ufl.inner(self._diag(self.C_M) * step.rate("M") - curvature_rate(d, w), dM)) * dx
+        F += (ufl.inner(C_N * step.rate("N") - gamma_rate, dN)
+              + ufl.inner(C_M * step.rate("M") - curvature_rate(d, w), dM)) * dx
         return F
 
     def compatible_strains(self, x):
@@ -211,7 +222,8 @@ class CosseratRod:
 
     def momentum(self, x):
         """p = rhoA v and L = rhoA phi x v + sum_i m_i d_i x w_i (densities; L about the origin)."""
-        p = self.rhoA * x["v"]
-        L = ufl.cross(x["r"], p) + sum((float(m) * ufl.cross(x[dn], x[wn])
-                                       for m, dn, wn in zip(self.masses, DIRECTORS, RATES)), ufl.zero(3))
+        rhoA, masses, _, _ = self._constants(ufl.domain.extract_unique_domain(x["v"]))
+        p = rhoA * x["v"]
+        L = ufl.cross(x["r"], p) + sum((m * ufl.cross(x[dn], x[wn])
+                                       for m, dn, wn in zip(masses, DIRECTORS, RATES)), ufl.zero(3))
         return {**{f"p_{c}": p[i] for i, c in enumerate("xyz")}, **{f"L_{c}": L[i] for i, c in enumerate("xyz")}}
