@@ -46,12 +46,19 @@ class Problem:
         F = model.residual(self.step, test, self.dx, self.ds)
         for load in self.loads:
             F += load.input_map(self.step, test, self.dx, self.ds)
-        self.F = compat.form(F)
-        self.J = compat.form(ufl.derivative(F, self.x1))
-        self.H = compat.form(model.hamiltonian(X1, self.dx, self.ds))
+        # Build every UFL form first, then compile: UFL's signatures (the JIT cache keys)
+        # depend on global counters that a compilation advances, so compiling F before
+        # J is even built would give J a different key in a cold and a warm process.
         powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
-        self.work = compat.form(self.h * sum(powers[1:], powers[0])) if powers else None
-        self.observables = {k: compat.form(v) for k, v in self._observables(X1).items()}
+        forms = {"F": F, "J": ufl.derivative(F, self.x1), "H": model.hamiltonian(X1, self.dx, self.ds),
+                 "work": self.h * sum(powers[1:], powers[0]) if powers else None,
+                 **{"obs:" + k: v for k, v in self._observables(X1).items()}}
+        for f in forms.values():
+            if f is not None:
+                f.signature()  # computed (and kept by UFL) before any compilation
+        compiled = {k: compat.form(f) if f is not None else None for k, f in forms.items()}
+        self.F, self.J, self.H, self.work = (compiled[k] for k in ("F", "J", "H", "work"))
+        self.observables = {k[4:]: f for k, f in compiled.items() if k.startswith("obs:")}
         bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]
         self.newton = Newton(self.F, self.J, self.x1, bcs, options=newton_options)
 
