@@ -85,6 +85,8 @@ def parser():
 
 
 def main(argv=None):
+    import signal
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `rodfem list | head`: end quietly, not via PETSc's handler
     args = parser().parse_args(argv)
     import logging
     logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
