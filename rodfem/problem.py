@@ -110,6 +110,29 @@ class Problem:
                 obs[name] = density * self.dx
         return obs
 
+    # -- one time step (the time loop's view of a problem) -------------------
+    def set_time(self, t):
+        """Inputs u(t) for the step (t = t_{n+1/2})."""
+        for load in self.loads:
+            load.update(t)
+
+    def predict(self, previous):
+        """Newton's start: x_{n+1}^0 = 2 x_n - x_{n-1} (x_n if `previous` is None)."""
+        if previous is None:
+            self.x1.x.array[:] = self.x0.x.array
+        else:
+            self.x1.x.array[:] = 2.0 * self.x0.x.array - previous
+
+    def solve(self, step, t):
+        """x_{n+1} by Newton (raises NewtonFailure)."""
+        return self.newton.solve(step, t)
+
+    def accept(self):
+        """x_n <- x_{n+1}; returns the old x_n (for the next prediction)."""
+        previous = self.x0.x.array.copy()
+        self.x0.x.array[:] = self.x1.x.array
+        return previous
+
     # -- evaluation ---------------------------------------------------------
     def assemble(self, compiled):
         return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)

@@ -58,17 +58,15 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
     try:
         for n in range(n_steps):
             t = n * dt
-            for load in problem.loads:
-                load.update(t + 0.5 * dt)
+            problem.set_time(t + 0.5 * dt)
             try:
-                if previous is not None:
-                    problem.x1.x.array[:] = 2.0 * problem.x0.x.array - previous
-                solve = problem.newton.solve(n + 1, t + dt)
+                problem.predict(previous)
+                solve = problem.solve(n + 1, t + dt)
             except NewtonFailure:
                 if previous is None:
                     raise
-                problem.x1.x.array[:] = problem.x0.x.array  # retry from x_n
-                solve = problem.newton.solve(n + 1, t + dt)
+                problem.predict(None)  # retry from x_n
+                solve = problem.solve(n + 1, t + dt)
             H_new = problem.hamiltonian()
             work = problem.supplied_work()
             supplied += work
@@ -77,8 +75,7 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
             if not np.isfinite(H_new):
                 raise NewtonFailure(n + 1, t + dt, float("nan"), solve.iterations, "non-finite energy")
             H = H_new
-            previous = problem.x0.x.array.copy()
-            problem.x0.x.array[:] = problem.x1.x.array
+            previous = problem.accept()
             res.rows.append(row)
             res.steps = n + 1
             if writer:
