@@ -161,6 +161,8 @@ class CosseratRod:
 
     def __init__(self, rhoA, rhoJ, C_N, C_M):
         self.rhoA = float(rhoA)
+        if not self.rhoA >= 0:  # also NaN
+            raise ValueError(f"CosseratRod: rhoA must be a number >= 0 (got {rhoA!r})")
         self.masses = director_masses(rhoJ)
         self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))
         if self.C_N.shape != (3,) or self.C_M.shape != (3,) or np.any(self.C_N < 0) or np.any(self.C_M < 0):

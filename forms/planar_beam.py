@@ -25,6 +25,9 @@ rows are integrated by parts (the end terms are the ports), the strain rows
 are tested with DG_{k-1}.  Testing with (v_m, omega_m, N, M) gives
 H_{n+1} - H_n = h y.u exactly.
 """
+import math
+import numbers
+
 import ufl
 
 from rodfem.materials import ParameterSet, material
@@ -82,6 +85,9 @@ class PlanarBeam:
     def __init__(self, rhoA, rhoI, energy, degree=1):
         if degree < 1:
             raise ValueError(f"degree must be >= 1 (got {degree})")
+        for name, value in (("rhoA", rhoA), ("rhoI", rhoI)):
+            if not (isinstance(value, ufl.core.expr.Expr) or (isinstance(value, numbers.Real) and math.isfinite(value) and value >= 0)):
+                raise ValueError(f"PlanarBeam: {name} must be a number >= 0 (got {value!r})")
         self.energy, self.degree = energy, degree
         self.densities = ParameterSet(rhoA=rhoA, rhoI=rhoI)  # run-time constants: no recompiling
         k = degree

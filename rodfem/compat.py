@@ -57,3 +57,12 @@ def create_vector(compiled_form):
     if first == "V":  # pragma: no cover - DOLFINx 0.10
         return petsc.create_vector(compiled_form.function_spaces[0])
     return petsc.create_vector(compiled_form)
+
+
+def jit_cache_dir():
+    """The directory DOLFINx's JIT compiles into ($XDG_CACHE_HOME/fenics, default ~/.cache/fenics)."""
+    from pathlib import Path
+
+    from dolfinx import jit
+    options = jit.get_options() if hasattr(jit, "get_options") else jit.get_parameters()
+    return Path(options["cache_dir"])

@@ -11,12 +11,15 @@ parallel) and repeats the step (`Newton.linear_solver` tells which one ran).
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
 """
+import os
+import re
 from dataclasses import dataclass
 
 from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 from . import compat
+from .errors import InputError
 
 # Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
 # round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
@@ -42,6 +45,15 @@ class Solve:
 
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+
+def bad_option(error):
+    """InputError for a PETSc option PETSc refused: its last message line (the reason) and PETSC_OPTIONS."""
+    lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
+    reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
+    where = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
+    return InputError(f"a PETSc option was refused{where}: {reason}; options for rodfem's solver "
+                      f"have the prefix -rodfem_, e.g. -rodfem_snes_max_it 50")
 
 
 class Newton:
@@ -73,10 +85,14 @@ class Newton:
             if not opts.hasName(self.prefix + key):
                 opts[self.prefix + key] = value
                 ours.append(self.prefix + key)
-        self.snes.setFromOptions()
-        self.snes.getKSP().setFromOptions()
-        for name in ours:
-            opts.delValue(name)
+        try:
+            self.snes.setFromOptions()
+            self.snes.getKSP().setFromOptions()
+        except PETSc.Error as e:
+            raise bad_option(e) from None
+        finally:
+            for name in ours:
+                opts.delValue(name)
 
     def _residual(self, snes, xin, b):
         xin.copy(self.xv)
@@ -118,6 +134,8 @@ class Newton:
             return self._solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN:
+            res = float("nan")  # PETSc leaves the last finite norm (0 at the first iteration)
         if reason <= 0 or res != res:
             if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
                 return self._solve_full_newton(step, t)

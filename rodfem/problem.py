@@ -11,9 +11,11 @@ from mpi4py import MPI
 
 from . import compat
 from .integrators import Step
+from .jitcache import compiles
+from .limits import check_elements
 from .newton import Newton
 from .ports import ENDS
-from .spaces import StateSpace
+from .spaces import StateSpace, dofs_per_element
 
 
 class Problem:
@@ -21,11 +23,15 @@ class Problem:
 
     initial: dict field -> callable x -> values (x[0] = s) or UFL expression;
              strains not given are set from model.compatible_strains.
+    n_elements: a whole number, at least the number of MPI ranks, small enough to fit in memory.
+    `t` is the time of the state x_n (0 at the start; the time loop advances it).
     """
 
+    @compiles
     def __init__(self, model, length, n_elements, loads=(), supports=(), initial=None,
                  integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None):
-        self.model, self.length, self.n_elements = model, float(length), int(n_elements)
+        self.model, self.length, self.t = model, float(length), 0.0
+        self.n_elements = check_elements(n_elements, dofs_per_element(model.fields), comm)
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
         self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
         self.comm = self.mesh.comm
