@@ -214,15 +214,23 @@ class RunWriter:
 
     # -- at the end (also after a failure; collective) ----------------------------------
     def finish(self, summary, result):
-        """Close history.csv, write summary.json (replacing "running"), then the plots."""
-        self.out.do("close history.csv", self._close)
-        self.out.do("write summary.json", write_json, self.out.file("summary.json"), summary)
-        self.out.do("write the plots", self._plots, result)
+        """Close history.csv, write summary.json (replacing "running"), then the plots; each is tried
+        even if one before failed (after a full disk, the summary may still fit), the first error raised."""
+        errors = []
+        for what, fn, *args in (("close history.csv", self._close),
+                                ("write summary.json", write_json, self.out.file("summary.json"), summary),
+                                ("write the plots", self._plots, result)):
+            try:
+                self.out.do(what, fn, *args)
+            except InputError as e:
+                errors.append(e)
+        if errors:
+            raise errors[0]
 
     def _close(self):
         if self._file is not None:
-            self._file.close()
-            self._file = self._csv = None
+            file, self._file, self._csv = self._file, None, None
+            file.close()  # closed even when its last flush fails
 
     def _plots(self, result):
         if result is not None and result.rows:

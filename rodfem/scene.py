@@ -80,7 +80,7 @@ class Parameter:
 def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
     """The parameters every scene has."""
     return [
-        Parameter("n_elements", n_elements, "", "number of finite elements", low=1),
+        Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
         Parameter("dt", dt, "s", "time step h", low=0, low_open=True),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
