@@ -47,13 +47,14 @@ class Solve:
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
 
 
-def bad_option(error):
-    """InputError for a PETSc option PETSc refused: its last message line (the reason) and PETSC_OPTIONS."""
+def petsc_error(error, what):
+    """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
+    what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""
     lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
     reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
-    where = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
-    return InputError(f"a PETSc option was refused{where}: {reason}; options for rodfem's solver "
-                      f"have the prefix -rodfem_, e.g. -rodfem_snes_max_it 50")
+    options = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
+    return InputError(f"{what}{options}: {reason}; rodfem's solver options have the prefix -rodfem_, "
+                      f"e.g. -rodfem_snes_max_it 50")
 
 
 class Newton:
@@ -89,7 +90,7 @@ class Newton:
             self.snes.setFromOptions()
             self.snes.getKSP().setFromOptions()
         except PETSc.Error as e:
-            raise bad_option(e) from None
+            raise petsc_error(e, "PETSc refused an option") from None
         finally:
             for name in ours:
                 opts.delValue(name)
@@ -124,7 +125,10 @@ class Newton:
 
     def _solve(self, step, t):
         self._start.copy(self._work)
-        self.snes.solve(None, self._work)
+        try:
+            self.snes.solve(None, self._work)
+        except PETSc.Error as e:  # not a divergence (that is a converged reason), but PETSc giving up
+            raise petsc_error(e, f"PETSc stopped at step {step} (t = {t:.6g})") from None
         reason = self.snes.getConvergedReason()
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
             self.settings["pc_factor_mat_solver_type"] = "superlu" if self.snes.comm.size == 1 else "mumps"

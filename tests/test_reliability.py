@@ -162,8 +162,11 @@ def test_a_nan_residual_is_not_recorded_as_zero(capsys, tmp_path):  # 16
     assert s["status"] == "newton-failure" and s["failure"]["residual"] == "nan"
 
 
-@pytest.mark.parametrize("option, words", [("-rodfem_snes_max_it abc", "Input string abc has no integer value"),
-                                           ("-rodfem_pc_type nonexistent", "Unable to find requested PC type")])
+@pytest.mark.parametrize("option, words", [
+    ("-rodfem_snes_max_it abc", "PETSc refused an option"),                    # when the solver is set up
+    ("-rodfem_pc_type nonexistent", "Unable to find requested PC type"),
+    ("-rodfem_pc_factor_mat_solver_type nonexistent", "PETSc stopped at step 1"),  # when it first solves
+])
 def test_a_bad_petsc_option_is_one_line(option, words, tmp_path):  # 12
     p = cli("run", *RU, "--out", str(tmp_path), extra_env={"PETSC_OPTIONS": option})
     assert p.returncode == 2
