@@ -59,11 +59,12 @@ def build(scene, p, comm, outdir=None, started=None):
     try:
         return scene.build(p, comm)
     except Exception as error:
-        stop = error
-        if not isinstance(error, STOPS):
-            if not interrupts.received():
-                raise
+        if interrupts.received():  # whatever the compiler's death looked like
             stop = Interrupted(interrupts.received())
+        elif isinstance(error, STOPS):
+            stop = error
+        else:
+            raise
         if outdir:
             status, failure = stopped(stop)
             with suppress(InputError):

@@ -101,10 +101,8 @@ class OutDir:
         release the lock at the end of the block."""
         self.do("create the directory", os.makedirs, os.path.join(self.path, "centreline"), 0o777, True,
                 hint="; --out must name a directory that can be created and written")
-        with agreed(self.comm):
-            if self.root:
-                self._take_lock()
         try:
+            self.do("lock the directory", self._take_lock)
             self.do("remove the previous run's files", self._clear)
             self.do("write summary.json", write_json, self.file("summary.json"), summary)
             yield self
@@ -114,10 +112,7 @@ class OutDir:
                 self._lock = None
 
     def _take_lock(self):
-        try:
-            fd = os.open(self.file(LOCK_FILE), os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as e:
-            raise InputError(f"--out {self.path!r}: cannot create {LOCK_FILE} ({e.strerror})") from None
+        fd = os.open(self.file(LOCK_FILE), os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -125,9 +120,9 @@ class OutDir:
             os.close(fd)
             raise InputError(f"--out {self.path!r} is in use by another rodfem run (pid {owner}): "
                              f"wait for it to end or choose another directory") from None
+        self._lock = fd
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
-        self._lock = fd
 
     def _clear(self):
         for pattern in OWN_FILES:
