@@ -57,3 +57,25 @@ def create_vector(compiled_form):
     if first == "V":  # pragma: no cover - DOLFINx 0.10
         return petsc.create_vector(compiled_form.function_spaces[0])
     return petsc.create_vector(compiled_form)
+
+
+def create_block_matrix(comm, diagonal):
+    """A PETSc matrix for the block-diagonal system of the compiled forms `diagonal`, each on
+    its own mesh (DOLFINx 0.5's create_matrix_block builds every block's pattern on the FIRST
+    block's mesh, which breaks for blocks on different meshes)."""
+    from dolfinx import cpp
+    maps = [(a.function_spaces[0].dofmap.index_map, a.function_spaces[0].dofmap.index_map_bs) for a in diagonal]
+    patterns = []
+    for i, a in enumerate(diagonal):
+        row = []
+        for j, (imap, bs) in enumerate(maps):
+            if i == j:
+                V = a.function_spaces[0]
+                sp = cpp.fem.create_sparsity_pattern(V.mesh.topology, [V.dofmap] * 2, set(a.integral_types))
+            else:
+                sp = cpp.la.SparsityPattern(comm, [maps[i][0], imap], [maps[i][1], bs])
+            row.append(sp)
+        patterns.append(row)
+    pattern = cpp.la.SparsityPattern(comm, patterns, [maps, maps], [[b for _, b in maps]] * 2)
+    pattern.assemble()
+    return cpp.la.petsc.create_matrix(comm, pattern)
