@@ -78,4 +78,32 @@ def create_block_matrix(comm, diagonal):
         patterns.append(row)
     pattern = cpp.la.SparsityPattern(comm, patterns, [maps, maps], [[b for _, b in maps]] * 2)
     pattern.assemble()
-    return cpp.la.petsc.create_matrix(comm, pattern)
+    A = cpp.la.petsc.create_matrix(comm, pattern)
+    # The local numbering the block assembly uses is field by field (owned_0, ghosts_0, owned_1, ...):
+    # attach that local-to-global map (as DOLFINx's create_matrix_block does).
+    from petsc4py import PETSc
+    lg = PETSc.LGMap().create(block_local_to_global(comm, maps), comm=PETSc.COMM_SELF)
+    A.setLGMap(lg, lg)
+    return A
+
+
+def block_local_to_global(comm, maps):
+    """Global indices of the block layout (x_1, ..., x_k) for the local numbering field by field."""
+    import numpy as np
+    sizes = np.array([imap.size_local * bs for imap, bs in maps], dtype=np.int64)
+    all_sizes = np.array(comm.allgather(sizes))                     # [rank, field]
+    rank_offset = np.concatenate([[0], np.cumsum(all_sizes.sum(axis=1))])
+    field_offset = np.concatenate([np.zeros((len(all_sizes), 1), np.int64), np.cumsum(all_sizes, axis=1)], axis=1)
+    out = []
+    for f, (imap, bs) in enumerate(maps):
+        out.append(rank_offset[comm.rank] + field_offset[comm.rank, f] + np.arange(sizes[f]))
+        ghosts, owners = np.asarray(imap.ghosts, dtype=np.int64), np.asarray(imap.owners)
+        starts = np.array(comm.allgather(imap.local_range[0]), dtype=np.int64)
+        base = rank_offset[owners] + field_offset[owners, f] + (ghosts - starts[owners]) * bs
+        out.append((base[:, None] + np.arange(bs)[None, :]).ravel())
+    return np.concatenate(out).astype(PETSc_int())
+
+
+def PETSc_int():
+    from petsc4py import PETSc
+    return PETSc.IntType

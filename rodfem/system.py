@@ -501,6 +501,7 @@ class BlockAssembler:
         inserted at the first assembly and kept (zeroEntries keeps the nonzero structure)."""
         A = compat.create_block_matrix(self.comm, [self.J[i][i] for i in range(len(self.J))])
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        A.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, False)   # rank 0 adds the joints' rows everywhere
         return A
 
     def jacobian(self, xin, A):
