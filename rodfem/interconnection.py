@@ -28,6 +28,8 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
+from .scene import ParameterError
+
 
 @dataclass
 class Frame:
@@ -35,6 +37,13 @@ class Frame:
     x: np.ndarray
     d: Optional[Sequence[np.ndarray]] = None
     phi: Optional[float] = None
+
+    @property
+    def kind(self):
+        """What the point carries, in words (for error messages)."""
+        if self.d is not None:
+            return "directors (3D)"
+        return "an angle (planar)" if self.phi is not None else "a position only"
 
     @property
     def R(self):
@@ -68,8 +77,8 @@ def ground(x=(), R=None):
 GROUND = ground()   # the world frame at the origin
 
 
-class ConstraintError(ValueError):
-    """A joint that cannot be built (one line: names the joint)."""
+class ConstraintError(ParameterError):
+    """A joint that cannot be built: bad input, one line naming the joint (the CLI exits with 2)."""
 
 
 def quadratic_form(g, n, scale=1.0):
@@ -122,6 +131,13 @@ class Joint:
         def g(q):
             return np.asarray(self.constraint(frame_a(q[:na]), frame_b(q[na:]), a0, b0), dtype=float).ravel()
         where = f"joint {self.name} ({self.a.describe()} - {self.b.describe()})"
+        if len(a0.x) != len(b0.x):
+            raise ConstraintError(f"{where} joins a {len(a0.x)}D point to a {len(b0.x)}D point")
+        try:
+            g(np.concatenate([qa0, qb0]))
+        except (TypeError, ValueError, IndexError) as err:
+            kinds = " and ".join(f.kind for f in (a0, b0))
+            raise ConstraintError(f"{where} does not fit points that have {kinds} ({err})") from None
         try:
             self.Q, self.c, self.e = quadratic_form(g, na + len(qb0), scale)
         except ConstraintError as err:

@@ -134,6 +134,7 @@ class System:
         self.momenta = sorted({k[1][4:] for k in compiled if k[1].startswith("obs:")},
                               key=lambda c: ("pL".index(c[0]), c))
         self.assembler = BlockAssembler(self, compiled)
+        self.assembler.check_independent()
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._ready = True
@@ -453,6 +454,39 @@ class BlockAssembler:
         is_from = PETSc.IS().createGeneral(self.wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X1, is_from, self.gathered, None)
         self.position = {int(g): k for k, g in enumerate(self.wanted)}
+
+    def check_independent(self):
+        """Refuse a redundant or inconsistent set of joints: the joints' velocity constraints
+        G(q_0) v = 0, restricted to the velocities not fixed by supports, must have full row rank
+        (else the multipliers are not unique and Newton's matrix is singular)."""
+        if not self.joints:
+            return
+        bad = None
+        if self.comm.rank == 0:
+            vals = self._values(self.X0)
+            cols = sorted({int(g) for j in self.joints for g in j.v_index if int(g) not in self.fixed})
+            where = {g: k for k, g in enumerate(cols)}
+            rows = []
+            for j in self.joints:
+                G = np.einsum("kij,j->ki", j.Q, self._pick(vals, j.q_index)) + j.c
+                block = np.zeros((j.size, len(cols)))
+                for k, g in enumerate(j.v_index):
+                    if int(g) in where:
+                        block[:, where[int(g)]] += G[:, k]
+                rows.append(block)
+            G = np.vstack(rows)
+            sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
+            rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+            if rank < G.shape[0]:
+                names = ", ".join(j.name for j in self.joints)
+                bad = (f"the joints ({names}) impose {G.shape[0]} conditions of which only {rank} are "
+                       "independent (a redundant or inconsistent set, e.g. a joint at a supported end): "
+                       "remove the redundant ones")
+        else:
+            self._values(self.X0)
+        bad = self.comm.bcast(bad, root=0)
+        if bad:
+            raise ConstraintError(bad)
 
     def _values(self, X):
         """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
