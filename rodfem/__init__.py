@@ -1,11 +1,13 @@
-"""rodfem: port-Hamiltonian rods, beams and strings in FEniCSx."""
+"""rodfem: port-Hamiltonian rods, beams, strings and multibody systems in FEniCSx."""
 import logging
 
 from .integrators import RULES, Step  # noqa: F401
+from .interconnection import GROUND, ConstraintError, ground  # noqa: F401
 from .newton import NewtonFailure  # noqa: F401
 from .ports import Load, Support, constant_in_time, ramp  # noqa: F401
 from .problem import Problem  # noqa: F401
 from .spaces import Field, StateSpace  # noqa: F401
+from .system import System  # noqa: F401
 from .timeloop import Result, run  # noqa: F401
 
 __version__ = "0.1.0"

@@ -11,6 +11,7 @@ parallel) and repeats the step (`Newton.linear_solver` tells which one ran).
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
 """
+import time
 from dataclasses import dataclass
 
 from dolfinx.fem import petsc as fpetsc
@@ -94,14 +95,25 @@ class Newton:
         self.prefix = prefix
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
-        self.snes.setFunction(lambda snes, xin, b: self.assembler.residual(xin, b), self.b)
-        self.snes.setJacobian(lambda snes, xin, A, P: self.assembler.jacobian(xin, A), self.A)
+        self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
         self._configure(self.settings)
         self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
 
     @property
     def bcs(self):
         return self.assembler.bcs
+
+    def _residual(self, snes, xin, b):
+        t0 = time.perf_counter()
+        self.assembler.residual(xin, b)
+        self.timings["F"] += time.perf_counter() - t0
+
+    def _jacobian(self, snes, xin, A, P):
+        t0 = time.perf_counter()
+        self.assembler.jacobian(xin, A)
+        self.timings["J"] += time.perf_counter() - t0
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own

@@ -27,7 +27,7 @@ from petsc4py import PETSc
 
 from . import compat
 from .body import Body
-from .interconnection import GROUND, ConstraintError, Joint, Point
+from .interconnection import ConstraintError, Joint, Point
 from .newton import Newton
 from .problem import compile_forms
 
