@@ -63,10 +63,10 @@ def build(p, comm):
 
     # ## The bodies: each beam straight between its two joints, with its weight as a load
     def add(name, ends, E, n_el, supports):
-        length, initial = straight(*ends)
         rhoA = p["rho"] * p["width"] ** 2
         gravity = Load("v", [0.0, -rhoA * p["g"]], "domain", f"gravity {name}")
-        return four_bar.add(name, beam(p, E), length, n_el, loads=[gravity], supports=supports, initial=initial)
+        return four_bar.add(name, beam(p, E), shape=straight(*ends), n_elements=n_el, loads=[gravity],
+                            supports=supports)
     crank = add("crank", CRANK, p["E"], round(n * 10 / 6), [Support("left", "pinned")])
     coupler = add("coupler", COUPLER, p["E2"], n, [])
     rocker = add("rocker", ROCKER, p["E"], n, [Support("right", "pinned")])

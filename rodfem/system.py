@@ -73,10 +73,15 @@ class System:
         self._ready = False
 
     # -- the sketch -------------------------------------------------------------
-    def add(self, name, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None):
-        """Place a body (a flexible one on [0, length] with n_elements cells, or a rigid one)."""
+    def add(self, name, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None, shape=None):
+        """Place a body: a flexible one on [0, length] with n_elements cells (or `shape` = (length,
+        initial), e.g. forms.planar_beam.straight(a, b)), or a rigid one (initial values only)."""
         if name in self.bodies or not name or "." in name:
             raise ValueError(f"body name {name!r} must be new, non-empty and without '.'")
+        if shape is not None:
+            if initial is not None:
+                raise ValueError(f"body {name}: give either shape or initial, not both")
+            length, initial = shape
         body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name)
         ref = BodyRef(name, body)
         self.bodies[name] = ref
