@@ -81,6 +81,25 @@ def cylindrical(axis=0):
     return cylindrical
 
 
+def _axis(frame, axis):
+    """A body-fixed direction of `frame`: a director index 0, 1, 2 or components (n_1, n_2, n_3) in its
+    directors, n_i d_i (linear in the directors, so a product of two axes is quadratic)."""
+    if np.ndim(axis) == 0:
+        return frame.d[int(axis)]
+    n = np.asarray(axis, dtype=float)
+    return sum(n[i] * frame.d[i] for i in range(3))
+
+
+def universal(axis_a=0, axis_b=0):
+    """Universal (Hooke, cardan) joint: the points coincide and a's joint axis stays perpendicular
+    to b's, a.n_a . b.n_b = 0 (4 conditions).  Each axis is fixed in its body: a director index
+    or components in the body's directors (a ground frame: in its R); they must be perpendicular
+    at t = 0.  b may turn about n_a and n_b, not about n_a x n_b."""
+    def universal(a, b, a0, b0):
+        return [*spherical(a, b, a0, b0), _axis(a, axis_a) @ _axis(b, axis_b)]
+    return universal
+
+
 def position(a, b, a0, b0):
     """b's point keeps its initial position relative to a's point in space (3 conditions; with a
     `drive` it follows a prescribed path: x_b - x_a - (x_b - x_a)(0) = g_p(t))."""
