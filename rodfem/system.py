@@ -179,7 +179,7 @@ class System:
             joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
         except ConstraintError:
             raise
-        except (ValueError, TypeError, IndexError) as err:
+        except (ValueError, TypeError, IndexError) as err:   # e.g. an offset on a point that has none
             raise ConstraintError(f"joint {joint.name} ({joint.a.describe()} - {joint.b.describe()}): {err}") from None
         return joint.size
 
@@ -459,6 +459,7 @@ class BlockAssembler:
         is_from = PETSc.IS().createGeneral(self.wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(self.X1, is_from, self.gathered, None)
         self.position = {int(g): k for k, g in enumerate(self.wanted)}
+        self._positions = {}   # index array -> positions in the gathered values (found once)
 
     def check_independent(self):
         """Refuse a redundant or inconsistent set of joints: the joints' velocity constraints
@@ -499,7 +500,12 @@ class BlockAssembler:
         return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
 
     def _pick(self, vals, idx):
-        return vals[[self.position[int(g)] for g in idx]]
+        """vals at the global indices idx (positions looked up once per index array)."""
+        key = id(idx)
+        pos = self._positions.get(key)
+        if pos is None:
+            pos = self._positions[key] = np.array([self.position[int(g)] for g in idx], dtype=int)
+        return vals[pos]
 
     # -- the joints' contributions ---------------------------------------------
     def _joint_terms(self, X):
