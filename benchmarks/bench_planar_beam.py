@@ -13,7 +13,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
 
@@ -23,32 +22,14 @@ from rodfem.scene import load
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def timed(problem):
-    """Wrap the SNES callbacks of problem.newton with timers."""
-    newton, t = problem.newton, {"F": 0.0, "J": 0.0}
-
-    def F(snes, x, b):
-        t0 = time.perf_counter()
-        newton._residual(snes, x, b)
-        t["F"] += time.perf_counter() - t0
-
-    def J(snes, x, A, P):
-        t0 = time.perf_counter()
-        newton._jacobian(snes, x, A, P)
-        t["J"] += time.perf_counter() - t0
-    newton.snes.setFunction(F, newton.b)
-    newton.snes.setJacobian(J, newton.A)
-    return t
-
-
 def cost(n, steps=150, repeats=3):
     scene = load("flying-spaghetti-2d")
     best = None
     for _ in range(repeats):
         p = scene.values({"n_elements": n})
         problem = scene.build(p, comm=__import__("mpi4py").MPI.COMM_WORLD)
-        t = timed(problem)
         res = run(problem, p["dt"], steps * p["dt"])
+        t = problem.newton.timings
         row = {"n_elements": n, "dofs": problem.dofs, "ms_per_step": 1e3 * res.wall_time / steps,
                "residual_ms": 1e3 * t["F"] / steps, "jacobian_ms": 1e3 * t["J"] / steps,
                "solve_ms": 1e3 * (res.wall_time - t["F"] - t["J"]) / steps,

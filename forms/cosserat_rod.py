@@ -75,6 +75,7 @@ moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
 import numpy as np
 import ufl
 
+from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
@@ -135,6 +136,13 @@ def body_moment(u, xm, w):
     return ufl.inner(m, angular_velocity(d, [w[n] for n in RATES]))
 
 
+def director_frame(q, position, offset=()):
+    """The point x = phi + sum_i X_i d_i at `offset` X (body frame) and the directors (numbers)."""
+    d = [np.asarray(q[n], dtype=float) for n in DIRECTORS]
+    x = np.asarray(q[position], dtype=float) + sum((X * di for X, di in zip(offset, d)), np.zeros(3))
+    return Frame(x=x, d=d)
+
+
 def director_masses(rhoJ):
     """m_k = (rhoJ_1 + rhoJ_2 + rhoJ_3)/2 - rhoJ_k, the director masses of the rotary inertia rhoJ."""
     J = np.asarray(rhoJ, dtype=float)
@@ -156,6 +164,8 @@ class CosseratRod:
     """
     supports = {"clamped": ["r", *DIRECTORS, "v", *RATES, "lam"], "pinned": ["r", "v"]}
     position = "r"
+    kinematics = {"r": "v", "d1": "w1", "d2": "w2", "d3": "w3"}   # configuration -> velocity: what joints act on
+    frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
     flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
 

@@ -28,8 +28,10 @@ H_{n+1} - H_n = h y.u exactly.
 import math
 import numbers
 
+import numpy as np
 import ufl
 
+from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet, material
 from rodfem.model import Field
 
@@ -77,23 +79,39 @@ class PlanarBeam:
     """Planar beam with line densities rhoA, rhoI and stored energy W(Gamma, kappa).
 
     degree k: P_k kinematics and DG_{k-1} strains (k = 1 is the paper's element).
+    gauss_points: Gauss points per element of every cell integral (default k + 2, which
+    integrates the polynomial terms exactly; the authors' code uses 2 for k = 1).
     """
     supports = {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]}
     position = "r"
     flows = {"force": "v", "moment": "omega"}
+    kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
 
-    def __init__(self, rhoA, rhoI, energy, degree=1):
+    @staticmethod
+    def frame(q, offset=()):
+        """The point at `offset` X in the section frame: x = r + A(phi) X, angle phi (numbers)."""
+        phi = q["phi"][0]
+        x = np.asarray(q["r"], dtype=float)
+        if len(offset) and any(offset):
+            c, s = np.cos(phi), np.sin(phi)
+            x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+        return Frame(x=x, phi=phi)
+
+    def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None):
         if degree < 1:
             raise ValueError(f"degree must be >= 1 (got {degree})")
         for name, value in (("rhoA", rhoA), ("rhoI", rhoI)):
             if not (isinstance(value, ufl.core.expr.Expr) or (isinstance(value, numbers.Real) and math.isfinite(value) and value >= 0)):
                 raise ValueError(f"PlanarBeam: {name} must be a number >= 0 (got {value!r})")
+        if gauss_points is not None and not (isinstance(gauss_points, int) and 1 <= gauss_points <= 10):
+            raise ValueError(f"gauss_points must be an integer in [1, 10] (got {gauss_points!r})")
         self.energy, self.degree = energy, degree
         self.densities = ParameterSet(rhoA=rhoA, rhoI=rhoI)  # run-time constants: no recompiling
         k = degree
         self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
-        self.quadrature_degree = 2 * k + 2
+        # an n-point Gauss rule is exact to degree 2n - 1 (DOLFINx picks n from the degree)
+        self.quadrature_degree = 2 * k + 2 if gauss_points is None else 2 * gauss_points - 1
 
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa) ds."""
@@ -124,3 +142,12 @@ class PlanarBeam:
         c = self.densities.on(ufl.domain.extract_unique_domain(x["v"]))
         return {"p_x": c["rhoA"] * x["v"][0], "p_y": c["rhoA"] * x["v"][1],
                 "L_z": c["rhoA"] * cross(x["r"], x["v"]) + c["rhoI"] * x["omega"]}
+
+
+def straight(start, end):
+    """A straight beam from `start` to `end`: (length, initial values of r and phi)."""
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    length = float(np.linalg.norm(end - start))
+    t = (end - start) / length
+    phi = float(np.arctan2(t[1], t[0]))
+    return length, {"r": lambda x: start[:, None] + np.outer(t, x[0]), "phi": lambda x: np.full(x.shape[1], phi)}

@@ -58,6 +58,7 @@ import ufl
 from dolfinx import fem
 
 from rodfem import compat
+from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
 from rodfem.newton import Newton
@@ -72,6 +73,14 @@ class String:
     supports = {"pinned": ["r", "v"], "fix-x": ["r.0", "v.0"], "fix-y": ["r.1", "v.1"], "fix-z": ["r.2", "v.2"]}
     position = "r"
     flows = {"force": "v"}
+    kinematics = {"r": "v"}   # configuration -> velocity: what joints act on
+
+    @staticmethod
+    def frame(q, offset=()):
+        """A string point has a position only (no offset)."""
+        if len(offset) and any(offset):
+            raise ValueError("a string end has no cross-section: a joint on it takes no offset")
+        return Frame(x=np.asarray(q["r"], dtype=float))
     fields = [Field("r", "P", 1, (3,)), Field("v", "P", 1, (3,)), Field("C", "DG", 0)]
     quadrature_degree = 2   # exact for every term: rhoA v.dv is quadratic, the rest cellwise constant
 

@@ -59,6 +59,61 @@ def create_vector(compiled_form):
     return petsc.create_vector(compiled_form)
 
 
+def create_block_matrix(comm, diagonal):
+    """A PETSc matrix for the block-diagonal system of the compiled forms `diagonal`, each on
+    its own mesh (DOLFINx 0.5's create_matrix_block builds every block's pattern on the FIRST
+    block's mesh, which breaks for blocks on different meshes)."""
+    from dolfinx import cpp
+    maps = [(a.function_spaces[0].dofmap.index_map, a.function_spaces[0].dofmap.index_map_bs) for a in diagonal]
+    patterns = []
+    for i, a in enumerate(diagonal):
+        row = []
+        for j, (imap, bs) in enumerate(maps):
+            if i == j:
+                V = a.function_spaces[0]
+                sp = cpp.fem.create_sparsity_pattern(V.mesh.topology, [V.dofmap] * 2, set(a.integral_types))
+            else:
+                sp = cpp.la.SparsityPattern(comm, [maps[i][0], imap], [maps[i][1], bs])
+            row.append(sp)
+        patterns.append(row)
+    pattern = cpp.la.SparsityPattern(comm, patterns, [maps, maps], [[b for _, b in maps]] * 2)
+    pattern.assemble()
+    A = cpp.la.petsc.create_matrix(comm, pattern)
+    # The local numbering the block assembly uses is field by field (owned_0, ghosts_0, owned_1, ...):
+    # attach that local-to-global map (as DOLFINx's create_matrix_block does).
+    from petsc4py import PETSc
+    lg = PETSc.LGMap().create(block_local_to_global(comm, maps), comm=PETSc.COMM_SELF)
+    A.setLGMap(lg, lg)
+    return A
+
+
+def block_local_to_global(comm, maps):
+    """Global indices of the block layout (x_1, ..., x_k) for the local numbering field by field."""
+    import numpy as np
+    sizes = np.array([imap.size_local * bs for imap, bs in maps], dtype=np.int64)
+    all_sizes = np.array(comm.allgather(sizes))                     # [rank, field]
+    rank_offset = np.concatenate([[0], np.cumsum(all_sizes.sum(axis=1))])
+    field_offset = np.concatenate([np.zeros((len(all_sizes), 1), np.int64), np.cumsum(all_sizes, axis=1)], axis=1)
+    out = []
+    for f, (imap, bs) in enumerate(maps):
+        out.append(rank_offset[comm.rank] + field_offset[comm.rank, f] + np.arange(sizes[f]))
+        ghosts, owners = np.asarray(imap.ghosts, dtype=np.int64), np.asarray(imap.owners)
+        starts = np.array(comm.allgather(imap.local_range[0]), dtype=np.int64)
+        base = rank_offset[owners] + field_offset[owners, f] + (ghosts - starts[owners]) * bs
+        out.append((base[:, None] + np.arange(bs)[None, :]).ravel())
+    return np.concatenate(out).astype(PETSc_int())
+
+
+def PETSc_int():
+    from petsc4py import PETSc
+    return PETSc.IntType
+
+
+def form_comm(ufl_form):
+    """The communicator of the mesh a UFL form is defined on."""
+    return ufl_form.ufl_domain().ufl_cargo().comm
+
+
 def jit_cache_dir():
     """The directory DOLFINx's JIT compiles into ($XDG_CACHE_HOME/fenics, default ~/.cache/fenics)."""
     from pathlib import Path

@@ -13,6 +13,7 @@ from the PETSc options database with the prefix ``rodfem_`` (e.g.
 """
 import os
 import re
+import time
 from dataclasses import dataclass
 
 from dolfinx.fem import petsc as fpetsc
@@ -57,25 +58,75 @@ def petsc_error(error, what):
                       f"e.g. -rodfem_snes_max_it 50")
 
 
-class Newton:
-    """Solves F(x) = 0 for the Function `x` (F, J compiled forms, bcs Dirichlet conditions)."""
+class FormAssembler:
+    """F(x) and J(x) of one mixed space: compiled forms F, J, the state Function x, Dirichlet bcs."""
 
-    def __init__(self, F, J, x, bcs, options=None, prefix="rodfem_"):
+    def __init__(self, F, J, x, bcs):
         self.F, self.J, self.x, self.bcs = F, J, x, bcs
-        comm = x.function_space.mesh.comm
-        self.b = compat.create_vector(F)
-        self.A = fpetsc.create_matrix(J)
-        self.xv = compat.petsc_vec(x)
+        self.comm = x.function_space.mesh.comm
+        self.vector = compat.petsc_vec(x)   # the unknown, as the PETSc vector Newton iterates on
+
+    def create_vector(self):
+        return compat.create_vector(self.F)
+
+    def create_matrix(self):
+        return fpetsc.create_matrix(self.J)
+
+    def update(self, xin):
+        """Make the forms see the iterate xin (copied into x, ghosts updated)."""
+        xin.copy(self.vector)
+        self.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def residual(self, xin, b):
+        self.update(xin)
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.F)
+        fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.vector], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, self.bcs, self.vector, -1.0)
+
+    def jacobian(self, xin, A):
+        A.zeroEntries()
+        fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
+        A.assemble()
+
+
+class Newton:
+    """Solves F(x) = 0 for the Function `x` (F, J compiled forms, bcs Dirichlet conditions),
+    or, with `assembler=`, for any unknown an assembler provides (a system of bodies)."""
+
+    def __init__(self, F=None, J=None, x=None, bcs=(), options=None, prefix="rodfem_", assembler=None):
+        self.assembler = assembler or FormAssembler(F, J, x, list(bcs))
+        comm = self.assembler.comm
+        self.b = self.assembler.create_vector()
+        self.A = self.assembler.create_matrix()
+        self.xv = self.assembler.vector
         self.settings = dict(DEFAULTS)
         self.settings["pc_factor_mat_solver_type"] = "petsc" if comm.size == 1 else "mumps"
         self.settings.update(options or {})
         self.prefix = prefix
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(prefix)
+        self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
         self.snes.setFunction(self._residual, self.b)
         self.snes.setJacobian(self._jacobian, self.A)
         self._configure(self.settings)
         self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
+
+    @property
+    def bcs(self):
+        return self.assembler.bcs
+
+    def _residual(self, snes, xin, b):
+        t0 = time.perf_counter()
+        self.assembler.residual(xin, b)
+        self.timings["F"] += time.perf_counter() - t0
+
+    def _jacobian(self, snes, xin, A, P):
+        t0 = time.perf_counter()
+        self.assembler.jacobian(xin, A)
+        self.timings["J"] += time.perf_counter() - t0
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
@@ -94,21 +145,6 @@ class Newton:
         finally:
             for name in ours:
                 opts.delValue(name)
-
-    def _residual(self, snes, xin, b):
-        xin.copy(self.xv)
-        self.xv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        with b.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector(b, self.F)
-        fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.xv], scale=-1.0)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(b, self.bcs, self.xv, -1.0)
-
-    def _jacobian(self, snes, xin, A, P):
-        A.zeroEntries()
-        fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
-        A.assemble()
 
     @property
     def linear_solver(self):
@@ -144,8 +180,7 @@ class Newton:
             if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
                 return self._solve_full_newton(step, t)
             raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
-        self._work.copy(self.xv)
-        self.xv.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.assembler.update(self._work)
         return Solve(its, res)
 
     def _solve_full_newton(self, step, t):

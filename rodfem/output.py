@@ -139,11 +139,17 @@ def frame_levels(n_steps, frames):
     return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
 
 
+def bodies_of(problem):
+    """[(name, body)]: the bodies of a System, or the single body of a Problem."""
+    refs = getattr(problem, "bodies", None)
+    return [(name, ref.body) for name, ref in refs.items()] if refs else [("", problem)]
+
+
 def gather_centreline(problem):
-    """(s, position[npoints, dim], {field: values}) of the continuous fields, on rank 0 (None elsewhere)."""
+    """(s, position[npoints, dim], {field: values}) of the nodal fields of a body, on rank 0 (None elsewhere)."""
     S = problem.space
     pos = S.field(problem.model.position)
-    names = [f.name for f in S.fields if f.family == "P" and f.degree == pos.degree]
+    names = [f.name for f in S.fields if f.family == pos.family and f.degree == pos.degree]
     local = {n: S.nodal(problem.x0, n) for n in names}
     gathered = problem.comm.gather(local, root=0)
     if problem.comm.rank != 0:
@@ -179,25 +185,36 @@ class RunWriter:
         self._file.flush()
 
     def frame(self, t):
-        data = gather_centreline(self.problem)  # collective
-        self.out.do("write a centreline frame", self._write_frame, t, data)
+        bodies = bodies_of(self.problem)
+        data = [gather_centreline(body) for _, body in bodies]  # collective
+        self.out.do("write a centreline frame", self._write_frame, t, bodies, data)
 
-    def _write_frame(self, t, data):
+    def _write_frame(self, t, bodies, data):
         import meshio
-        s, pos, fields = data
-        pts = np.zeros((len(s), 3))
-        pts[:, : pos.shape[1]] = pos
-        cells = [("line", np.column_stack([np.arange(len(s) - 1), np.arange(1, len(s))]))]
-        point_data = {"s": s}
-        for name, vals in fields.items():
-            if vals.shape[1] == 2:
-                vals = np.column_stack([vals, np.zeros(len(vals))])
-            point_data[name] = vals if vals.shape[1] > 1 else vals[:, 0]
+        pts, cells, point_data, shapes = [], [], {}, []
+        single = len(bodies) == 1
+        for k, ((_, body), (s, pos, fields)) in enumerate(zip(bodies, data)):
+            start = sum(len(p) for p in pts)
+            p3 = np.zeros((len(s), 3))
+            p3[:, : pos.shape[1]] = pos
+            pts.append(p3)
+            idx = start + np.arange(len(s))
+            cells.append(("vertex", idx[:, None]) if len(s) == 1 else ("line", np.column_stack([idx[:-1], idx[1:]])))
+            columns = {"s": s, "body": np.full(len(s), float(k))}
+            if single:   # one body: its nodal fields too (a system's bodies have different fields)
+                for name, vals in fields.items():
+                    if vals.shape[1] == 2:
+                        vals = np.column_stack([vals, np.zeros(len(vals))])
+                    columns[name] = vals if vals.shape[1] > 1 else vals[:, 0]
+            for name, vals in columns.items():
+                point_data.setdefault(name, []).append(vals)
+            shapes.append(pos.copy())
+        point_data = {k: np.concatenate(v) for k, v in point_data.items()}
         name = f"centreline/frame_{len(self.frames):05d}.vtu"
-        mesh = meshio.Mesh(pts, cells, point_data=point_data)
+        mesh = meshio.Mesh(np.concatenate(pts), cells, point_data=point_data)
         replace_atomically(self.out.file(name), lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
         self.frames.append((t, name))
-        self.snapshots.append((t, pos.copy()))
+        self.snapshots.append((t, shapes))
         replace_atomically(self.out.file("centreline.pvd"), self._write_pvd)
 
     def _write_pvd(self, path):
@@ -250,6 +267,7 @@ def summarize(scene_name, params, problem, result, status="completed", failure=N
         "max_balance_error_relative": result.max_balance_error / Hmax,
         "H_initial": float(H[0]), "H_final": float(H[-1]), "max_abs_H": Hmax,
         "ports": [load.name for load in problem.loads], "supports": [f"{s.kind}@{s.end}" for s in problem.supports],
+        "joints": [f"{j.name}: {j.a.describe()} - {j.b.describe()}" for j in getattr(problem, "joints", [])],
         "final": {k: v for k, v in (result.rows[-1].items() if result.rows else [])},
     }
 
@@ -281,17 +299,19 @@ def plot_shapes(path, snapshots, max_shapes=16):
     import matplotlib.pyplot as plt
     idx = np.unique(np.linspace(0, len(snapshots) - 1, min(max_shapes, len(snapshots))).astype(int))
     cmap = plt.get_cmap("viridis")
-    dim = snapshots[0][1].shape[1]
+    dim = max(p.shape[1] for p in snapshots[0][1])
     fig = plt.figure(figsize=(7, 6))
     ax = fig.add_subplot(projection="3d" if dim == 3 else None)
     for j, i in enumerate(idx):
-        t, p = snapshots[i]
+        t, shapes = snapshots[i]
         c = cmap(j / max(len(idx) - 1, 1))
-        ax.plot(*[p[:, k] for k in range(dim)], color=c, lw=1.5, label=f"t = {t:.3g}" if j in (0, len(idx) - 1) else None)
+        for b, p in enumerate(shapes):   # one line per body (a marker for a rigid body)
+            label = f"t = {t:.3g}" if j in (0, len(idx) - 1) and b == 0 else None
+            ax.plot(*[p[:, k] for k in range(dim)], "o" if len(p) == 1 else "-", color=c, lw=1.5, ms=4, label=label)
     if dim == 2:
         ax.set_aspect("equal", adjustable="datalim")
     else:  # equal scales on the three axes: a cube around the swept region
-        pts = np.concatenate([snapshots[i][1] for i in idx])
+        pts = np.concatenate([p for i in idx for p in snapshots[i][1]])
         centre, half = 0.5 * (pts.max(0) + pts.min(0)), 0.5 * np.max(np.ptp(pts, axis=0)) or 1.0
         ax.set_xlim(centre[0] - half, centre[0] + half)
         ax.set_ylim(centre[1] - half, centre[1] + half)

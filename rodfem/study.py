@@ -27,6 +27,7 @@ Error measure (stated in study.json, study.md and on stdout)
 
 with q the compared history columns: the reference's columns (analytic), or
 else the tip_* columns, or else the mean_* columns (no free end), or else
+the markers' positions (<name>_x, _y, _z: mechanisms), or else
 every observable of the run.  scale is the reference's "scale" (analytic),
 else the largest excursion
 max_t |q_ref(t) - q_ref(0)| of the reference run (so a relative error is
@@ -130,7 +131,9 @@ def compared_columns(row, analytic=None):
     if analytic:
         return [k for k in analytic if k != "scale"]
     tips = [k for k in row if k.startswith("tip_")]
-    return tips or [k for k in row if k.startswith("mean_")] or [k for k in row if k not in BOOKKEEPING]
+    markers = [k for k in row if k.endswith(("_x", "_y", "_z")) and not k.startswith(("p_", "L_", "mean_"))]
+    return (tips or [k for k in row if k.startswith("mean_")] or markers
+            or [k for k in row if k not in BOOKKEEPING])
 
 
 def _history(result, cols):

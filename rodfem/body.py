@@ -1,0 +1,148 @@
+"""One body of a mechanism: a model on its own mesh, with its state, step residual and ports.
+
+A flexible body (rod, beam, string) lives on an interval mesh of [0, L]; a
+rigid body (a model with ``point = True``) on a mesh of one unit cell, where
+its fields are cellwise constant (DG0) and int f dx = f.  A `Body` builds
+the UFL forms of one time step and compiles nothing: a `Problem` (one body)
+or a `System` (bodies joined by joints) compiles the forms of all its bodies
+together and solves them with one Newton.
+
+Only what the body uses is built: the loads it lists, the supports it lists,
+the tip only if the end s = L is free (else the mean position
+(1/L) int r ds), momentum maps only if nothing is supported.
+"""
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+
+from .integrators import Step
+from .jitcache import compiles
+from .limits import check_elements
+from .ports import ENDS
+from .spaces import StateSpace, dofs_per_element
+
+
+class Body:
+    """The discrete PH system of `model` on [0, L] with `n_elements` cells (or one rigid body).
+
+    initial: dict field -> callable x -> values (x[0] = s) or UFL expression;
+             strains not given are set from model.compatible_strains.
+    n_elements (a flexible body): a whole number, at least the number of MPI ranks, small enough to fit in memory.
+    """
+
+    @compiles  # the elements and the initial values' expressions: under the JIT cache lock
+    def __init__(self, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None,
+                 integrator="midpoint", comm=MPI.COMM_WORLD, name=""):
+        self.model, self.name = model, name
+        self.rigid = bool(getattr(model, "point", False))
+        if self.rigid:
+            length, n_elements = 1.0, 1
+            if supports:
+                raise ValueError(f"body {name or model}: a rigid body has no ends to support; "
+                                 "fix it with a joint to GROUND")
+        self.length = float(length)
+        self.n_elements = 1 if self.rigid else check_elements(n_elements, dofs_per_element(model.fields), comm)
+        self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
+        self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
+        self.comm = self.mesh.comm
+        self.space = S = StateSpace(self.mesh, model.fields)
+        self.x0, self.x1, self.state0 = (fem.Function(S.V) for _ in range(3))
+        self.h = fem.Constant(self.mesh, 1.0)
+
+        self._tag_ends()
+        self.dx = ufl.Measure("dx", domain=self.mesh, metadata={"quadrature_degree": model.quadrature_degree})
+        self.ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.end_tags)
+        self._set_initial(initial or {})
+        self.step = Step(S.split(self.x0), S.split(self.x1), self.h, integrator)
+        for load in self.loads:
+            load.bind(self.mesh, S)
+        self.bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]
+
+    # -- the forms of one step (UFL, not compiled) ------------------------------
+    def residual_form(self):
+        """E (x_{n+1} - x_n)/h - J z - B u, tested: the model's residual and its loads' input maps."""
+        test = self.space.split(ufl.TestFunction(self.space.V))
+        F = self.model.residual(self.step, test, self.dx, self.ds)
+        for load in self.loads:
+            F += load.input_map(self.step, test, self.dx, self.ds)
+        return F
+
+    def forms(self, prefix=""):
+        """dict of the UFL forms a run needs: F, J = dF/dx_{n+1}, H(x_{n+1}), the supplied work h y.u
+        (None without loads) and the observables ('obs:' + column name)."""
+        F = self.residual_form()
+        powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
+        X1 = self.space.split(self.x1)
+        return {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
+                "work": self.h * sum(powers[1:], powers[0]) if powers else None,
+                **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
+
+    # -- set-up -------------------------------------------------------------
+    def _tag_ends(self):
+        m = self.mesh
+        m.topology.create_connectivity(0, 1)
+        self.facets = {
+            "left": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], 0.0)),
+            "right": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], self.length)),
+        }
+        idx = np.concatenate([self.facets["left"], self.facets["right"]]).astype(np.int32)
+        vals = np.concatenate([np.full(len(self.facets["left"]), ENDS["left"]),
+                               np.full(len(self.facets["right"]), ENDS["right"])]).astype(np.int32)
+        order = np.argsort(idx)
+        self.end_tags = dmesh.meshtags(m, 0, idx[order], vals[order])
+
+    def _set_initial(self, initial):
+        S = self.space
+        unknown = set(initial) - set(S.names)
+        if unknown:
+            raise ValueError(f"initial values for unknown fields {sorted(unknown)}; fields are {S.names}")
+        for name, value in initial.items():
+            if not isinstance(value, ufl.core.expr.Expr):
+                S.assign(self.x0, name, value)
+        X0 = S.split(self.x0)
+        for name, value in initial.items():
+            if isinstance(value, ufl.core.expr.Expr):
+                S.assign(self.x0, name, value)
+        for name, expr in self.model.compatible_strains(X0).items():
+            if name not in initial:
+                S.assign(self.x0, name, expr)
+        self.x1.x.array[:] = self.x0.x.array
+        self.state0.x.array[:] = self.x0.x.array
+
+    def observables(self, X):
+        """Columns of the history as UFL functionals of the state X (= x_{n+1})."""
+        obs = {}
+        supported = {sup.end for sup in self.supports}
+        pos = X[self.model.position]
+        axes = "xyz"[: pos.ufl_shape[0]]
+        if self.rigid:      # the body's position (the unit cell: int x dx = x)
+            for i, c in enumerate(axes):
+                obs[c] = pos[i] * self.dx
+        elif "right" not in supported:
+            for i, c in enumerate(axes):
+                obs[f"tip_{c}"] = pos[i] * self.ds(ENDS["right"])
+        else:  # no free end: the mean position (1/L) int r ds shows how the body moves
+            for i, c in enumerate(axes):
+                obs[f"mean_{c}"] = pos[i] / self.length * self.dx
+        if not supported:
+            obs.update(self.momentum_forms(X))
+        return obs
+
+    def momentum_forms(self, X):
+        """The momentum maps (p_x, ..., L_z) of the model as functionals."""
+        return {name: density * self.dx for name, density in self.model.momentum(X).items()}
+
+    # -- one time step ------------------------------------------------------
+    def set_time(self, t):
+        """Inputs u(t) for the step (t = t_{n+1/2})."""
+        for load in self.loads:
+            load.update(t)
+
+    @property
+    def dofs(self):
+        im = self.space.V.dofmap.index_map
+        return im.size_global * self.space.V.dofmap.index_map_bs
+
+    def describe_elements(self):
+        return {f.name: f"{f.family}{f.degree}" + (f"^{f.shape[0]}" if f.shape else "") for f in self.space.fields}

@@ -1,0 +1,203 @@
+"""Multibody systems: bodies joined by joints (rodfem/system.py, forms/joints.py, forms/rigid_body.py).
+
+What can fail here: the four-bar against the authors' own reference value, the
+exact energy balance of the whole system, position constraints at round-off
+(index 2 with quadratic constraints), conservation of momentum maps of a free
+system, observed orders, serial = 2 ranks, and the one-line errors for bad
+mechanisms.
+"""
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from rodfem import Load, Support, run
+from rodfem.interconnection import ConstraintError, ground
+from rodfem.scene import load
+from rodfem.system import System
+
+from forms import joints
+from forms.cosserat_rod import CosseratRod
+from forms.planar_beam import PlanarBeam, quadratic, straight
+from forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
+
+
+def four_bar(**overrides):
+    scene = load("four-bar-2d")
+    p = scene.values(overrides)
+    return scene.build(p, MPI.COMM_WORLD), p
+
+
+def marker_at_end(**overrides):
+    system, p = four_bar(**overrides)
+    res = run(system, p["dt"], p["t_end"])
+    return np.array([res.rows[-1]["marker_x"], res.rows[-1]["marker_y"]]), res
+
+
+def test_four_bar_reproduces_the_authors_reference_point():
+    """The coupler's mid-node at t = 1 with h = 0.005 and 10/6/6 elements, 2 Gauss points: the
+    authors' code (fourbar_convergence.m, moofeKIT) gives (1.396144818042612, -0.763824524916379)
+    with a Newton tolerance of 1e-5.  We measured a difference of 3e-12: the same discrete model."""
+    x, res = marker_at_end(t_end=1.0, dt=0.005)
+    assert np.max(np.abs(x - [1.396144818042612, -0.763824524916379])) < 1e-10
+    # 3 Gauss points give another (equally valid) discretisation: it must differ, or the
+    # quadrature parameter did nothing
+    x3, _ = marker_at_end(t_end=1.0, dt=0.005, gauss_points=3)
+    assert 0 < np.max(np.abs(x3 - x))
+
+
+def test_four_bar_balance_and_pins_at_round_off():
+    """H_{n+1} - H_n = h y.u (gravity is the input) to 1.5e-14 max|H| measured (bound 1e-12), and the
+    pins' gap |x_a - x_b| <= 3e-15 measured (bound 1e-13 m on bars of 1.5-2.2 m)."""
+    _, res = marker_at_end(t_end=1.0)
+    H = res.column("H")
+    assert res.max_balance_error <= 1e-12 * np.max(np.abs(H))
+    assert np.max(res.column("constraint_residual")) <= 1e-13
+    assert np.all(res.column("newton_its")[1:] <= 4)
+
+
+def test_four_bar_time_order_two():
+    """Self-convergence of the mid-node at t = 0.4: errors against h/8 fall with order 2."""
+    xs = {h: marker_at_end(t_end=0.4, dt=h)[0] for h in (0.04, 0.02, 0.01, 0.0025)}
+    e = [np.linalg.norm(xs[h] - xs[0.0025]) for h in (0.04, 0.02, 0.01)]
+    orders = np.log2(np.array(e[:-1]) / np.array(e[1:]))
+    assert np.all(orders > 1.8), orders
+
+
+def test_four_bar_space_convergence():
+    """Mid-node at t = 0.2, h = 0.02, coupler/rocker elements n = 4, 8, 16 against n = 32: the error falls
+    at least with order 1.8 (P1/DG0; measured: see the assertion message)."""
+    xs = {n: marker_at_end(t_end=0.2, n_elements=n)[0] for n in (4, 8, 16, 32)}
+    e = [np.linalg.norm(xs[n] - xs[32]) for n in (4, 8, 16)]
+    orders = np.log2(np.array(e[:-1]) / np.array(e[1:]))
+    assert np.all(orders > 1.8), (e, orders)
+
+
+def pendulum(mass_a=1.0, mass_b=2.0, g=9.81):
+    """A double pendulum of two point masses on massless links (the `distance` joint) hung at the origin."""
+    s = System()
+    a = s.add("a", PointMass(mass_a, dim=2), initial=PointMass.initial([1.0, 0.0]))
+    b = s.add("b", PointMass(mass_b, dim=2), initial=PointMass.initial([1.0, -1.0], [0.5, 0.0]),
+              loads=[Load("v", [0.0, -mass_b * g], "domain", "gravity b")])
+    s.join(joints.distance, ground((0.0, 0.0)), a.point(), name="link_a")
+    s.join(joints.distance, a.point(), b.point(), name="link_b")
+    s.marker("b", b.point())
+    return s
+
+
+def test_double_pendulum_keeps_link_lengths_to_round_off():
+    """|x_b - x_a|^2 = 1 is quadratic: the midpoint index-2 scheme keeps it to 1.5e-13 over 200 steps
+    (bound 1e-12); H - supplied (the total energy with gravity) is constant to the balance error."""
+    res = run(pendulum(), 0.01, 2.0)
+    assert np.max(res.column("constraint_residual")) <= 1e-12
+    total = res.column("H") - res.column("supplied")
+    assert np.max(np.abs(total - total[0])) <= 1e-11 * np.max(res.column("H"))
+    assert np.ptp(res.column("b_x")) > 0.5      # it really swings
+
+
+def test_free_pinned_beams_conserve_momentum():
+    """Two flexible beams pinned together, thrown spinning with no load: p_x, p_y and L_z of the
+    whole system are conserved (the joint's reactions cancel pairwise) to 1e-12 relative."""
+    s = System()
+    beam = PlanarBeam(1.0, 0.1, quadratic(EA=1e3, GA=1e3, EI=10.0))
+    La, ia = straight((0.0, 0.0), (1.0, 0.0))
+    Lb, ib = straight((1.0, 0.0), (1.0, 1.0))
+    ia["v"] = lambda x: np.vstack([0 * x[0], 0.5 * x[0] + 0.3])        # a shear-spin velocity field
+    a = s.add("a", beam, La, 4, initial=ia)
+    b = s.add("b", beam, Lb, 4, initial={**ib, "omega": lambda x: np.full(x.shape[1], 1.0)})
+    s.join(joints.pin, a.end, b.start)
+    res = run(s, 0.01, 1.0)
+    for col in ("p_x", "p_y", "L_z"):
+        c = res.column(col)
+        assert np.ptp(c) <= 1e-12 * max(np.max(np.abs(c)), 1.0), col
+    assert abs(res.column("L_z")[0]) > 0.1
+    assert res.max_balance_error <= 1e-12 * np.max(res.column("H"))
+
+
+def test_rigid_body_spins_with_orthonormal_directors():
+    """A free director rigid body (J = 1, 2, 3) spun about an axis near the middle one (unstable):
+    H, p and all of L conserved; d_i.d_j = delta_ij to round-off."""
+    s = System()
+    R = np.eye(3)
+    body = s.add("body", RigidBody(2.0, (1.0, 2.0, 3.0)), initial=RigidBody.initial([0, 0, 0], R, omega=[0.01, 3.0, 0.02]))
+    res = run(s, 0.01, 3.0)
+    for col in ("H", "L_x", "L_y", "L_z", "p_x"):
+        c = res.column(col)
+        assert np.ptp(c) <= 1e-12 * max(np.max(np.abs(c)), 1.0), col
+    b = body.body
+    D = np.stack([b.x0.x.array[b.space.collapse(n)[1]] for n in ("d1", "d2", "d3")], axis=1) if b.x0.x.array.size else np.eye(3)
+    assert np.max(np.abs(D.T @ D - np.eye(3))) <= 1e-13
+
+
+def test_nothing_unused_is_assembled():
+    """Each joint adds exactly its conditions to the unknowns; without joints there is no multiplier block."""
+    full, _ = four_bar(t_end=0.02)
+    full.build()
+    bodies = sum(r.body.dofs for r in full.bodies.values())
+    assert full.dofs == bodies + 4                      # two pins, 2 conditions each
+    s = System()
+    L, init = straight((0, 0), (1, 0))
+    s.add("a", PlanarBeam(1.0, 1.0, quadratic(EA=10, GA=10, EI=1)), L, 4, initial=init)
+    s.build()
+    assert s.lam_space is None and s.dofs == s.bodies["a"].body.dofs
+
+
+def test_bad_mechanisms_give_one_line_errors():
+    beam = PlanarBeam(1.0, 1.0, quadratic(EA=10, GA=10, EI=1))
+    rod = CosseratRod(1.0, (1.0, 0.5, 0.5), (0.1, 0.1, 0.1), (0.1, 0.1, 0.1))
+    L, init = straight((0, 0), (1, 0))
+
+    def system():
+        s = System()
+        return s, s.add("beam", beam, L, 2, initial=init, supports=[Support("left", "pinned")])
+    # a point of a body that is not in the system
+    s, a = system()
+    other, b = system()
+    with pytest.raises(ConstraintError, match="not in this system"):
+        s.join(joints.pin, a.end, b.start)
+    # a planar joint on a 3D rod end (no angle), and a 2D point joined to a 3D one
+    s, a = system()
+    r = s.add("rod", rod, 1.0, 2, initial={"r": lambda x: np.vstack([1 + x[0], 0 * x[0], 0 * x[0]]),
+                                            "d1": _const([1, 0, 0]), "d2": _const([0, 1, 0]), "d3": _const([0, 0, 1])})
+    s.join(joints.pin, a.end, r.start)
+    with pytest.raises(ConstraintError, match="2D point to a 3D point"):
+        s.build()
+    # a joint that does not hold at t = 0
+    s, a = system()
+    s.join(joints.pin, ground((0.5, 0.0)), a.end)
+    with pytest.raises(ConstraintError, match="does not hold in the initial configuration"):
+        s.build()
+    # redundant: a pin to the ground at an end that is already pinned
+    s, a = system()
+    s.join(joints.pin, ground((0.0, 0.0)), a.start)
+    with pytest.raises(ConstraintError, match="independent"):
+        s.build()
+    # not quadratic: a planar rigid body joined at an offset (x + A(phi) X is trigonometric)
+    s, a = system()
+    body = s.add("body", PlanarRigidBody(1.0, 1.0), initial=PlanarRigidBody.initial([1.5, 0.0]))
+    s.join(joints.pin, a.end, body.point((-0.5, 0.0)))
+    with pytest.raises(ConstraintError, match="not quadratic"):
+        s.build()
+
+
+def test_bad_mechanism_from_the_cli_is_one_line(rodfem, tmp_path):
+    p = rodfem("run", "four-bar-2d", "--set", "n_elements=5", "--out", str(tmp_path / "o"), "--quiet")
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "n_elements" in p.stderr
+
+
+@pytest.mark.mpi
+def test_four_bar_two_ranks_equal_serial(rodfem, tmp_path):
+    """`mpirun -n 2` gives the serial history (measured: 1e-14 relative), every column."""
+    args = ["run", "four-bar-2d", "--set", "t_end=0.5", "--quiet"]
+    serial = rodfem(*args, "--out", str(tmp_path / "s"))
+    par = rodfem(*args, "--out", str(tmp_path / "p"), np=2)
+    assert serial.returncode == 0 and par.returncode == 0, par.stderr[-2000:]
+    a = np.genfromtxt(tmp_path / "s" / "history.csv", delimiter=",", names=True)
+    b = np.genfromtxt(tmp_path / "p" / "history.csv", delimiter=",", names=True)
+    assert a.dtype.names == b.dtype.names
+    for name in a.dtype.names:
+        assert np.max(np.abs(a[name] - b[name])) <= 1e-8 * max(np.max(np.abs(a[name])), 1.0), name
+
+
+def _const(v):
+    v = np.asarray(v, dtype=float)
+    return lambda x: np.outer(v, np.ones(x.shape[1]))
