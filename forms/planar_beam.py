@@ -101,7 +101,8 @@ class PlanarBeam:
         if degree < 1:
             raise ValueError(f"degree must be >= 1 (got {degree})")
         for name, value in (("rhoA", rhoA), ("rhoI", rhoI)):
-            if not (isinstance(value, ufl.core.expr.Expr) or (isinstance(value, numbers.Real) and math.isfinite(value) and value >= 0)):
+            number = isinstance(value, numbers.Real) and math.isfinite(value) and value >= 0
+            if not (number or isinstance(value, ufl.core.expr.Expr)):
                 raise ValueError(f"PlanarBeam: {name} must be a number >= 0 (got {value!r})")
         if gauss_points is not None and not (isinstance(gauss_points, int) and 1 <= gauss_points <= 10):
             raise ValueError(f"gauss_points must be an integer in [1, 10] (got {gauss_points!r})")

@@ -58,7 +58,8 @@ def json_ready(x):
 
 
 def write_json(path, data):
-    """`data` as JSON, replacing `path` atomically; on a full disk, overwritten in place (which frees its blocks first)."""
+    """`data` as JSON, replacing `path` atomically; on a full disk, overwritten in place
+    (which frees its blocks first)."""
     text = json.dumps(json_ready(data), indent=2, default=float)
 
     def write(target):

@@ -14,7 +14,7 @@ def ensure_standard_streams():
         try:
             os.fstat(fd)
         except OSError:
-            null = os.open(os.devnull, os.O_RDWR)  # the lowest free descriptor: fd itself, unless a lower one is closed too
+            null = os.open(os.devnull, os.O_RDWR)  # the lowest free descriptor: fd, unless a lower one is closed
             if null != fd:
                 os.dup2(null, fd)
                 os.close(null)
