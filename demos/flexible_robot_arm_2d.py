@@ -86,10 +86,9 @@ def build(p, comm):
     # ## The arm: a straight beam along x, pinned at the hub, driven there by the moment M (t <= t_load)
     beam = PlanarBeam(p["rhoA"], p["rhoI"], quadratic(EA=p["EA"], GA=p["GA"], EI=p["EI"]),
                       gauss_points=p["gauss_points"])
-    length, initial = straight((0.0, 0.0), (p["L"], 0.0))
     hub = Load("omega", constant_in_time(p["M"], until=p["t_load"]), "left", "hub moment")
-    beam = arm.add("beam", beam, length, p["n_elements"], loads=[hub], supports=[Support("left", "pinned")],
-                   initial=initial)
+    beam = arm.add("beam", beam, shape=straight((0.0, 0.0), (p["L"], 0.0)), n_elements=p["n_elements"],
+                   loads=[hub], supports=[Support("left", "pinned")])
 
     # ## The payload (optional): a rigid body welded to the free end, or a point mass pinned there
     if p["tip_mass"] > 0:
