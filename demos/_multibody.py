@@ -1,49 +1,8 @@
-# Shared pieces of the multibody scenes: a System that records extra history
-# columns (momentum maps about a fixed pin, the frame of a rigid body), and
-# the nodal fields of a body gathered on every rank.
+# Shared pieces of the multibody scenes: the nodal fields of a body gathered
+# on every rank, the frame of a rigid body and the orthonormality of directors
+# (for history columns added with System.record).
 import numpy as np
-from dolfinx import fem
-from mpi4py import MPI
-
-from rodfem import compat
-from rodfem.system import System
-
 from forms.cosserat_rod import DIRECTORS
-
-
-class RecordingSystem(System):
-    """A System whose history has extra columns: each function in `columns` maps the
-    system (state x_{n+1}) to a dict of numbers (collective: called on every rank)."""
-
-    def __init__(self, *args, columns=(), **kwargs):
-        super().__init__(*args, **kwargs)
-        self.columns = list(columns)
-
-    def observe(self):
-        obs = super().observe()
-        for column in self.columns:
-            obs.update(column(self))
-        return obs
-
-
-def momentum_map(name):
-    """A column function: the momentum map `name` ('L_z', 'p_x', ...) summed over all bodies, of x_{n+1}.
-
-    (The System writes p and L only for a free system; a scene pinned at the
-    origin can still record L about the origin, which the pin's reaction does not change.)"""
-    cache = {}
-
-    def column(system):
-        if "forms" not in cache:
-            cache["forms"] = []
-            for ref in system.bodies.values():
-                body = ref.body
-                maps = body.momentum_forms(body.space.split(body.x1))
-                if name in maps:
-                    cache["forms"].append(compat.form(maps[name]))
-        local = sum(fem.assemble_scalar(f) for f in cache["forms"])
-        return {name: system.comm.allreduce(local, op=MPI.SUM)}
-    return column
 
 
 def nodal(body, field, state="x1"):

@@ -54,11 +54,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rodfem import Load, Support
+from rodfem import Load, Support, System
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, stiffness
 
-from demos._multibody import RecordingSystem, nodal, orthonormality, rigid_frame
+from demos._multibody import nodal, orthonormality, rigid_frame
 from demos.crane_manoeuvre import trolley_force
 from demos.hanging_cable import hanging_guess, material_parameters, string_model
 from forms import joints
@@ -103,7 +103,8 @@ def payload_columns(system):
 
 
 def build(p, comm):
-    crane = RecordingSystem(integrator=p["integrator"], comm=comm, columns=[payload_columns])
+    crane = System(integrator=p["integrator"], comm=comm)
+    crane.record(payload_columns)
     m, c = p["mass"], p["c"]
 
     # ## The cable: the trolley force at the top (its height held by the rail), gravity along it

@@ -52,11 +52,10 @@
 #          rodfem run flexible-robot-arm-2d --set tip_mass=20 --set tip_inertia=1
 import sys
 
-from rodfem import Load, Support, constant_in_time
+from rodfem import Load, Support, System, constant_in_time
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, density, stiffness
 
-from demos._multibody import RecordingSystem, momentum_map
 
 from forms import joints
 from forms.planar_beam import PlanarBeam, quadratic, straight
@@ -78,10 +77,10 @@ parameters = common(n_elements=10, dt=0.05, t_end=15.0) + [
 
 
 def build(p, comm):
-    # L_z about the pin (the origin) is recorded as a history column: the
-    # System writes momentum maps only for a free system, but the pin's
-    # reaction has no moment about the origin.
-    arm = RecordingSystem(integrator=p["integrator"], comm=comm, columns=[momentum_map("L_z")])
+    # The momentum maps (about the origin) go into the history although the arm is
+    # pinned: the pin sits at the origin, so its reaction has no moment about it
+    # and L_z changes only by the hub moment.
+    arm = System(integrator=p["integrator"], comm=comm, momentum=True)
 
     # ## The arm: a straight beam along x, pinned at the hub, driven there by the moment M (t <= t_load)
     beam = PlanarBeam(p["rhoA"], p["rhoI"], quadratic(EA=p["EA"], GA=p["GA"], EI=p["EI"]),
