@@ -46,7 +46,7 @@ class Body:
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
         self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
         self.comm = self.mesh.comm
-        self.space = S = StateSpace(self.mesh, model.fields)
+        self.space = S = (RigidSpace if self.rigid else StateSpace)(self.mesh, model.fields)
         self.x0, self.x1, self.state0 = (fem.Function(S.V) for _ in range(3))
         self.h = fem.Constant(self.mesh, 1.0)
 
@@ -146,3 +146,39 @@ class Body:
 
     def describe_elements(self):
         return {f.name: f"{f.family}{f.degree}" + (f"^{f.shape[0]}" if f.shape else "") for f in self.space.fields}
+
+
+class RigidSpace(StateSpace):
+    """The state space of a rigid body (DG0 fields on a mesh of one cell), read and written without
+    collapsing subspaces: DOLFINx 0.5.2 segfaults when it collapses a subspace of a mixed space that
+    has a scalar field on a rank without cells (the body's one cell lives on one rank, so
+    `mpirun -n 2` crashed for the planar rigid body).  Each field component has one dof, on the
+    rank that owns the cell (found with locate_dofs_topological on the subspace views)."""
+
+    def _dofs(self, name):
+        """Local dofs of field `name` in W, one per component (empty on the ranks without the cell)."""
+        cells = np.arange(self.mesh.topology.index_map(self.mesh.topology.dim).size_local, dtype=np.int32)
+        sub = self.sub(name)
+        subs = [sub.sub(c) for c in range(self.field(name).size)] if self.field(name).shape else [sub]
+        return np.concatenate([fem.locate_dofs_topological(V, self.mesh.topology.dim, cells) for V in subs])
+
+    def _midpoint(self):
+        x = self.mesh.geometry.x
+        return (np.array([[0.5 * (x[:, 0].min() + x[:, 0].max())], [0.0], [0.0]]) if len(x)
+                else np.zeros((3, 0)))
+
+    def assign(self, u, name, value):
+        """Set field `name` of u to `value` (a callable x -> values, evaluated at the cell's midpoint)."""
+        if isinstance(value, ufl.core.expr.Expr):
+            return super().assign(u, name, value)
+        dofs = self._dofs(name)
+        if len(dofs):
+            u.x.array[dofs] = np.asarray(value(self._midpoint()), dtype=float).reshape(-1)
+        u.x.scatter_forward()
+
+    def nodal(self, u, name):
+        """(s, values[npoints, size]): the cell midpoint and the field's value, where the cell is owned."""
+        dofs = self._dofs(name)
+        if not len(dofs):
+            return np.zeros(0), np.zeros((0, self.field(name).size))
+        return self._midpoint()[0], u.x.array[dofs].reshape(1, -1)

@@ -67,10 +67,14 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
-    def __init__(self, integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None):
+    def __init__(self, integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None, momentum=None):
+        """momentum: write the total momentum maps p, L (about the origin) to the history; by
+        default only for a free system (nothing supported or grounded), where they are conserved
+        when no load acts."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
         self.t = 0.0  # the time of the state x_n (the time loop advances it)
-        self.bodies, self.joints, self.markers = {}, [], {}
+        self.momentum = momentum
+        self.bodies, self.joints, self.markers, self.recorders = {}, [], {}, []
         self._ready = False
 
     # -- the sketch -------------------------------------------------------------
@@ -108,6 +112,11 @@ class System:
         """Record the position of `point` in the history as columns name_x, name_y (, name_z)."""
         self.markers[name] = point
 
+    def record(self, columns):
+        """Record more history columns: `columns(system)` returns a dict of numbers for the state
+        x_{n+1}; it is called on every rank (it may be collective)."""
+        self.recorders.append(columns)
+
     # -- building ---------------------------------------------------------------
     def build(self):
         """Compile every body's forms, bind the joints, make the block Newton (once)."""
@@ -123,7 +132,7 @@ class System:
                     forms[(ref.name, key)] = f
         free = not any(r.body.supports for r in refs) and not any(
             j.a.body is None or j.b.body is None for j in self.joints)
-        if free:   # total momentum maps of a free system
+        if self.momentum or (self.momentum is None and free):   # total momentum maps
             for ref in refs:
                 X1 = ref.body.space.split(ref.body.x1)
                 for k, f in ref.body.momentum_forms(X1).items():
@@ -243,6 +252,8 @@ class System:
         obs = self.assembler.point_observables()
         for k in self.momenta:
             obs[k] = self._sum("obs:" + k)
+        for columns in self.recorders:
+            obs.update(columns(self))
         return obs
 
     @property

@@ -1,0 +1,30 @@
+# Shared pieces of the multibody scenes: the nodal fields of a body gathered
+# on every rank, the frame of a rigid body and the orthonormality of directors
+# (for history columns added with System.record).
+import numpy as np
+from forms.cosserat_rod import DIRECTORS
+
+
+def nodal(body, field, state="x1"):
+    """All nodal values of `field` of a body, sorted by s, on every rank: (s, values[n, size])."""
+    s, vals = body.space.nodal(getattr(body, state), field)
+    parts = body.comm.allgather((s, vals))
+    s = np.concatenate([p[0] for p in parts])
+    vals = np.concatenate([p[1] for p in parts])
+    order = np.argsort(s, kind="stable")
+    s, vals = s[order], vals[order]
+    keep = np.concatenate([[True], np.diff(s) > 0]) if len(s) else []
+    return s[keep], vals[keep]
+
+
+def rigid_frame(body, state="x1"):
+    """(x, R = [d1 d2 d3]) of a director-based rigid body (every rank)."""
+    x = nodal(body, "x", state)[1][0]
+    R = np.column_stack([nodal(body, d, state)[1][0] for d in DIRECTORS])
+    return x, R
+
+
+def orthonormality(body, state="x1"):
+    """max |R^T R - I| over the nodes of a director-based body (rigid or rod), every rank."""
+    R = np.stack([nodal(body, d, state)[1] for d in DIRECTORS], axis=2)
+    return float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3))))
