@@ -1,0 +1,313 @@
+"""The parallel direct solver: exact block elimination over the rank interfaces (a Schur complement).
+
+A rod, beam or chain of bodies split over ranks couples the ranks through a handful of
+dofs (the state at a shared node: 6 for the planar beam, 30 for the 3D rod).  Off-the-shelf
+parallel LU (MUMPS, superlu_dist) does not see that: on this 2-core machine it was 4-10x
+slower than serial LU and ran out of workspace at 10^4 planar elements (issue 11).
+
+`InterfaceSchur` (a PETSc PC of type python, the default of `mpirun` runs) eliminates
+instead.  Split the unknowns into an interface G (a small global set that cuts every
+coupling between ranks: for each entry A_ij with i, j on different ranks, i or j is in G)
+and the interiors I_r of the ranks (owned dofs not in G).  Interiors of different ranks do
+not couple, so with the Schur complement (|G| x |G|, dense)
+
+    S = A_GG - sum_r A_GIr A_IrIr^{-1} A_IrG
+
+the solution of A x = b is
+
+    y_r = A_IrIr^{-1} b_Ir                          (each rank, its own sparse LU)
+    S x_G = b_G - sum_r A_GIr y_r                    (one allreduce of |G| numbers, dense solve)
+    x_Ir = y_r - Z_r x_G,   Z_r = A_IrIr^{-1} A_IrG   (computed once per Jacobian)
+
+This is Gaussian elimination in another order, not an iteration: the result is that of a
+direct solve, to round-off (no Krylov tolerance to choose); an application costs one local
+triangular solve and one allreduce of |G| numbers; a new Jacobian costs the local LU, one
+solve per interface dof next to the rank (Z_r) and one allreduce of |G|^2 numbers.
+
+No copy of the local matrix is made: the rank factors its diagonal block D (owned rows and
+columns) with its interface rows replaced by identity rows, M = [[A_II, A_IG], [0, I]]
+(rows zeroed in place and restored after the factorization).  M's pivots are those of A_II,
+M [y; 0] = [b_I; 0] gives y = A_II^{-1} b_I and M z = e_g gives z = [-Z e_g; e_g].
+
+The local LU is PETSc's own (ordering `-rodfem_schur_ordering`, default rcm); a zero pivot
+(a saddle point: multipliers) switches it, for the rest of the run, to SuperLU, which pivots.
+A local block that SuperLU cannot factor either (singular) makes the PC fall back to MUMPS on
+the whole matrix for the rest of the run.
+"""
+import atexit
+import gc
+import time
+import weakref
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+INTERIOR_SOLVERS = ("petsc", "superlu")
+_LIVE = weakref.WeakSet()
+
+
+@atexit.register   # registered after petsc4py's finalization, so it runs before it
+def _clean_up():
+    """Destroy the parallel PETSc objects Python has dropped while Python still runs.
+
+    petsc4py does not destroy a parallel object when Python frees it (that must be
+    collective): it puts it on a garbage list that PetscFinalize empties.  A SNES whose PC is
+    this Python class would then call back into an interpreter that has shut down (a
+    segmentation fault at exit).  A Newton is part of a reference cycle (its SNES calls its
+    methods), so collect cycles first, then empty the list (collective: every rank exits
+    through here)."""
+    if _LIVE and PETSc.Sys.isInitialized() and not PETSc.Sys.isFinalized():
+        gc.collect()
+        PETSc.garbage_cleanup()
+
+
+def _is(indices, comm=PETSc.COMM_SELF):
+    return PETSc.IS().createGeneral(np.asarray(indices, dtype=PETSc.IntType), comm=comm)
+
+
+def _dense(M):
+    """A small sequential AIJ matrix as a dense numpy array."""
+    m, n = M.getSize()
+    out = np.zeros((m, n))
+    if m and n:
+        indptr, cols, vals = M.getValuesCSR()
+        rows = np.repeat(np.arange(m), np.diff(indptr))
+        np.add.at(out, (rows, cols), vals)
+    return out
+
+
+def interface(pairs_of_ranks):
+    """The interface G: for each pair of ranks r < s, the coupled dofs of r or those of s, whichever
+    are fewer.  `pairs_of_ranks[r]` lists (i, j, s) for each entry A_ij of rank r's rows with
+    column j owned by rank s != r.  Every rank computes the same set from the gathered lists."""
+    sides = {}
+    for r, prs in enumerate(pairs_of_ranks):
+        for i, j, s in prs:
+            lower, upper = sides.setdefault((min(r, s), max(r, s)), (set(), set()))
+            (lower if r < s else upper).add(int(i))   # the row, on rank r
+            (upper if r < s else lower).add(int(j))   # the column, on rank s
+    gamma = set()
+    for key in sorted(sides):
+        lower, upper = sides[key]
+        gamma |= lower if len(lower) <= len(upper) else upper
+    return np.array(sorted(gamma), dtype=np.int64)
+
+
+class InterfaceSchur:
+    """PCPYTHON context: exact elimination of the rank interiors, dense Schur complement on the interface."""
+
+    def __init__(self):
+        self.pattern = None       # nonzero count the interface was computed for
+        self.solver = "petsc"     # local LU: petsc -> superlu on a zero pivot
+        self.ordering = "rcm"
+        self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
+        self.ksp = None
+        self.nG = 0
+        self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S"), 0.0)
+        _LIVE.add(self)
+
+    # -- PCPYTHON interface ---------------------------------------------------------
+    def setFromOptions(self, pc):
+        opts = PETSc.Options(pc.getOptionsPrefix())
+        self.ordering = opts.getString("schur_ordering", self.ordering)
+        solver = opts.getString("schur_local_solver", self.solver)
+        if solver not in INTERIOR_SOLVERS:
+            raise ValueError(f"-{pc.getOptionsPrefix()}schur_local_solver {solver}: one of {INTERIOR_SOLVERS}")
+        self.solver = solver
+
+    def setUp(self, pc):
+        A, _ = pc.getOperators()
+        self.comm = A.getComm().tompi4py()
+        if self.fallback is None:
+            nz = self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
+            if nz != self.pattern:
+                self._split(A)
+                self.pattern = nz
+            if self._factor(A):
+                return
+            self._fall_back(pc)
+        self.fallback.setOperators(A)
+        self.fallback.setUp()
+
+    def apply(self, pc, b, x):
+        if self.fallback is not None:
+            self.fallback.solve(b, x)
+            return
+        barr = b.getArray(readonly=True)
+        self.rhs.array[:] = barr
+        self.rhs.array[self.G_own] = 0.0
+        self.ksp.solve(self.rhs, self.sol)
+        y = self.sol.array
+        if self.nG:
+            g = np.zeros(self.nG)
+            g[self.G_own_pos] = barr[self.G_own]
+            g -= self.AGC @ y[self.C]
+            g = self.comm.allreduce(g, op=MPI.SUM)
+            xG = np.linalg.solve(self.S, g)
+            if len(self.ZG):
+                y = y - self.Z @ xG[self.ZG]
+            y[self.G_own] = xG[self.G_own_pos]
+        x.getArray()[:] = y
+
+    def reset(self, pc):
+        self.pattern = None
+
+    def destroy(self, pc):
+        self.release()
+
+    def release(self):
+        """Destroy the PETSc objects this context made (it sets itself up again when used)."""
+        for obj in [self.ksp, self.fallback, getattr(self, "rhs", None), getattr(self, "sol", None),
+                    *(getattr(self, "subs", None) or [])]:
+            if obj is not None:
+                obj.destroy()
+        for name in ("is_R", "is_G", "is_C", "is_Gown"):
+            if getattr(self, name, None) is not None:
+                getattr(self, name).destroy()
+        self.ksp = self.fallback = self.subs = None
+        self.pattern = None
+
+    def view(self, pc, viewer):
+        viewer.printfASCII(f"  interface Schur complement: {self.nG} interface dofs, local LU {self.describe()}\n")
+
+    def describe(self):
+        return "mumps" if self.fallback is not None else f"schur({self.solver})"
+
+    # -- the interface (once per nonzero pattern) ------------------------------------
+    def _split(self, A):
+        comm = self.comm
+        lo, hi = A.getOwnershipRange()
+        ranges = np.array(A.getOwnershipRanges())
+        indptr, cols, _ = A.getValuesCSR()
+        n = hi - lo
+        rows = np.repeat(np.arange(n), np.diff(indptr))
+        off = (cols < lo) | (cols >= hi)
+        owner = np.searchsorted(ranges, cols[off], side="right") - 1
+        G = interface(comm.allgather(np.stack([rows[off] + lo, cols[off], owner], axis=1)))
+        self.G, self.nG = G, len(G)
+        own = (G >= lo) & (G < hi)
+        self.G_own = (G[own] - lo).astype(PETSc.IntType)   # local indices of the owned interface dofs
+        self.G_own_pos = np.flatnonzero(own)                 # and their positions in G
+        in_G = np.zeros(n, bool)
+        in_G[self.G_own] = True
+        # interior rows coupled to interface columns (A_IG), and the interface columns they touch
+        touch = np.isin(cols, G) & ~in_G[rows]
+        self.R = np.unique(rows[touch])                       # local rows
+        self.ZG = np.unique(np.searchsorted(G, cols[touch]))  # positions in G
+        # interior columns of this rank that interface rows (of any rank) reference (A_GI)
+        gamma_rows = in_G[rows]
+        referenced = np.concatenate(comm.allgather(cols[gamma_rows]))
+        referenced = np.unique(referenced[(referenced >= lo) & (referenced < hi)]) - lo
+        self.C = referenced[~in_G[referenced]].astype(PETSc.IntType)   # local indices
+        self.is_R = _is(self.R + lo)
+        self.is_G = _is(G)
+        self.is_C = _is(self.C + lo)
+        self.is_Gown = _is(G[own])
+        self.subs = None
+        self.rhs = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
+        self.sol = self.rhs.duplicate()
+        self._make_ksp()
+
+    def _make_ksp(self):
+        if self.ksp is not None:
+            self.ksp.destroy()
+        self.ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        self.ksp.setType("preonly")
+        pc = self.ksp.getPC()
+        pc.setType("lu")
+        pc.setFactorSolverType(self.solver)
+        if self.solver == "petsc":
+            pc.setFactorOrdering(self.ordering)
+
+    # -- a new Jacobian: local LU, Z and S -----------------------------------------------
+    def _factor(self, A):
+        """Factor the local block with its interface rows as identity rows; Z, S.  False: singular."""
+        T, t0 = self.times, time.process_time()
+        if self.nG:
+            subs = A.createSubMatrices([self.is_R, self.is_G, self.is_Gown],
+                                       [self.is_G, self.is_C, self.is_G], submats=self.subs)
+            self.subs = subs
+            A_RG, self.AGC, A_GG_own = (_dense(M) for M in subs)
+        t1 = time.process_time()
+        T["extract"] += t1 - t0
+        D = A.getDiagonalBlock()
+        saved = [D.getRow(int(i)) for i in self.G_own]
+        D.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+        D.zeroRows(self.G_own, diag=1.0)
+        t2 = time.process_time()
+        T["zero"] += t2 - t1
+        try:
+            ok = self._local_lu(D)
+        finally:
+            t3 = time.process_time()
+            T["lu"] += t3 - t2
+            for i, (cols, vals) in zip(self.G_own, saved):
+                D.setValues([int(i)], cols, vals, addv=PETSc.InsertMode.INSERT_VALUES)
+            D.assemble()
+            t4 = time.process_time()
+            T["restore"] += t4 - t3
+        if not ok:
+            return False
+        if not self.nG:
+            return True
+        # Z = A_II^{-1} A_IG on the interface columns next to this rank's interior
+        n = self.rhs.getSize()
+        own_pos = {int(p): k for k, p in enumerate(self.G_own_pos)}
+        self.Z = np.zeros((n, len(self.ZG)))
+        for k, g in enumerate(self.ZG):
+            self.rhs.set(0.0)
+            if g in own_pos:            # M z = e_g gives z = [-Z e_g; e_g]
+                self.rhs.array[self.G_own[own_pos[g]]] = 1.0
+                self.ksp.solve(self.rhs, self.sol)
+                self.Z[:, k] = -self.sol.array
+            else:                       # an interface column owned by another rank
+                self.rhs.array[self.R] = A_RG[:, g]
+                self.ksp.solve(self.rhs, self.sol)
+                self.Z[:, k] = self.sol.array
+        self.Z[self.G_own, :] = 0.0
+        t5 = time.process_time()
+        T["Z"] += t5 - t4
+        S = np.zeros((self.nG, self.nG))
+        S[self.G_own_pos, :] = A_GG_own
+        S[:, self.ZG] -= self.AGC @ self.Z[self.C, :]
+        self.S = self.comm.allreduce(S, op=MPI.SUM)
+        T["S"] += time.process_time() - t5
+        return True
+
+    def _local_lu(self, D):
+        """LU of the local block (collective: all ranks agree); PETSc's -> SuperLU on a zero pivot."""
+        while True:
+            self.ksp.setOperators(D)
+            pc = self.ksp.getPC()
+            pc.setReusePreconditioner(False)
+            try:   # a zero pivot shows as a failed solve (DIVERGED_PC_FAILED), not as an error
+                self.ksp.setUp()
+                pc.setReusePreconditioner(True)   # keep this factor when D's rows are restored
+                self.rhs.set(0.0)
+                self.ksp.solve(self.rhs, self.sol)
+                ok = self.ksp.getConvergedReason() >= 0
+            except PETSc.Error:
+                ok = False
+            if self.comm.allreduce(ok, op=MPI.LAND):
+                return True
+            if self.solver != "petsc":
+                return False
+            self.solver = "superlu"
+            self._make_ksp()
+
+    def _fall_back(self, pc):
+        """MUMPS on the whole matrix, for the rest of the run (a local block no LU can factor)."""
+        prefix = (pc.getOptionsPrefix() or "") + "schur_fallback_"
+        ksp = PETSc.KSP().create(pc.getComm())
+        ksp.setOptionsPrefix(prefix)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        opts = PETSc.Options(prefix)
+        for key, value in (("mat_mumps_icntl_14", 400),   # workspace: the default estimate is too small
+                           ("mat_mumps_icntl_7", 0)):     # AMD (the METIS ordering failed at 10^4 elements)
+            if not opts.hasName(key):
+                opts[key] = value
+        ksp.setFromOptions()
+        self.fallback = ksp
