@@ -17,8 +17,6 @@ MatSetValues, which sends them at assembly.
 `FastJacobian.usable(J)` says whether a form qualifies (cell and exterior-facet integrals,
 no dof transformations, 32-bit PETSc indices); otherwise the caller keeps DOLFINx's assembly.
 """
-import ctypes
-import ctypes.util
 import hashlib
 import importlib.util
 import os
@@ -27,12 +25,14 @@ import sys
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat
+from . import compat, petsc_raw
 
 C_SOURCE = r"""
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+
+#define MAXPAT 8
 
 typedef void (*kernel_t)(double*, const double*, const double*, const double*, const int*, const uint8_t*);
 
@@ -69,6 +69,9 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
   int32_t* idx_o = key_d + 3 * nd;
   int ng = 0, status = 0;
   uint8_t perm = 0;
+  int pat_len[MAXPAT];
+  const int32_t* pat_cols[MAXPAT];
+  int32_t* pat_rank = malloc(sizeof(int32_t) * nd * (MAXPAT + 1));
   for (int e = 0; e < n && status == 0; ++e) {
     int32_t c = cells[e];
     const int32_t* cd = dofs + (size_t)c * nd;
@@ -87,19 +90,38 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
     }
     sort_by_key(nD, key_d, idx_d);
     sort_by_key(nO, key_o, idx_o);
+    int npat = 0;
     for (int i = 0; i < nd; ++i) {
       int32_t row = cd[i];
       if (bc[row]) continue;
       const double* Ai = Ae + (size_t)i * nd;
       if (row < nown) {
-        int p = di[row], end = di[row + 1];
-        for (int k = 0; k < nD; ++k) {
-          while (p < end && dj[p] != key_d[k]) ++p;
-          if (p == end) { status = -1; break; }
-          da[p] += Ai[idx_d[k]];
+        /* the positions of this cell's columns in the row: rows of the same node share their
+           column list, so a list seen before in this cell gives them without a search */
+        int start = di[row], len = di[row + 1] - start;
+        const int32_t* cols = dj + start;
+        int32_t* rank = NULL;
+        for (int q = 0; q < npat; ++q)
+          if (pat_len[q] == len && (pat_cols[q] == cols || memcmp(pat_cols[q], cols, sizeof(int32_t) * len) == 0)) {
+            rank = pat_rank + (size_t)q * nd;
+            break;
+          }
+        if (!rank) {
+          rank = pat_rank + (size_t)(npat < MAXPAT ? npat : MAXPAT) * nd;
+          int p = 0;
+          for (int k = 0; k < nD; ++k) {
+            while (p < len && cols[p] != key_d[k]) ++p;
+            if (p == len) { status = -1; break; }
+            rank[k] = p;
+          }
+          if (status) break;
+          if (npat < MAXPAT) { pat_len[npat] = len; pat_cols[npat] = cols; ++npat; }
         }
+        double* arow = da + start;
+        for (int k = 0; k < nD; ++k)
+          arow[rank[k]] += Ai[idx_d[k]];
         if (nO) {
-          p = oi[row]; end = oi[row + 1];
+          int p = oi[row], end = oi[row + 1];
           for (int k = 0; k < nO; ++k) {
             while (p < end && oj[p] != key_o[k]) ++p;
             if (p == end) { status = -1; break; }
@@ -118,6 +140,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
   }
   free(Ae);
   free(key_d);
+  free(pat_rank);
   return status ? -1 : ng;
 }
 
@@ -169,44 +192,18 @@ def _compiled():
     return mod
 
 
-def _petsc_lib():
-    for name in ("libpetsc_real.so.3.18", "libpetsc_real.so", ctypes.util.find_library("petsc_real"),
-                 ctypes.util.find_library("petsc")):
-        if name:
-            try:
-                return ctypes.CDLL(name)
-            except OSError:
-                continue
-    raise OSError("libpetsc not found")
+class _Block:
+    """A sequential AIJ block: its structure (copied once) and its values (open/close)."""
 
-
-class _SeqArrays:
-    """CSR structure (copied) and value array (PETSc's own, while open) of a SeqAIJ matrix."""
-
-    def __init__(self, lib, handle):
-        self.lib, self.handle = lib, ctypes.c_void_p(handle)
-        n = ctypes.c_int32()
-        ia, ja = ctypes.POINTER(ctypes.c_int32)(), ctypes.POINTER(ctypes.c_int32)()
-        done = ctypes.c_int()
-        assert lib.MatGetRowIJ(self.handle, 0, 0, 0, ctypes.byref(n), ctypes.byref(ia), ctypes.byref(ja),
-                               ctypes.byref(done)) == 0 and done.value
-        self.n = n.value
-        self.i = np.ctypeslib.as_array(ia, shape=(self.n + 1,)).copy()
-        self.j = np.ctypeslib.as_array(ja, shape=(int(self.i[-1]),)).copy() if self.i[-1] else np.zeros(0, np.int32)
-        assert lib.MatRestoreRowIJ(self.handle, 0, 0, 0, ctypes.byref(n), ctypes.byref(ia), ctypes.byref(ja),
-                                   ctypes.byref(done)) == 0
+    def __init__(self, handle):
+        self.i, self.j = petsc_raw.rowij(handle)
+        self.values = petsc_raw.Values(handle)
 
     def open(self):
-        """The address of PETSc's value array (until close())."""
-        self._ptr = ctypes.c_void_p()
-        if self.lib.MatSeqAIJGetArray(self.handle, ctypes.byref(self._ptr)) != 0:
-            raise RuntimeError("MatSeqAIJGetArray failed")
-        return self._ptr.value or 0
+        return self.values.open()
 
     def close(self):
-        """Give the array back (PETSc marks the matrix as changed)."""
-        if self.lib.MatSeqAIJRestoreArray(self.handle, ctypes.byref(self._ptr)) != 0:
-            raise RuntimeError("MatSeqAIJRestoreArray failed")
+        self.values.close()
 
 
 class FastJacobian:
@@ -217,7 +214,7 @@ class FastJacobian:
     def usable(J):
         from dolfinx.fem import IntegralType
         V0, V1 = J.function_spaces
-        return (PETSc.IntType == np.int32 and V0 == V1 and not V0.element.needs_dof_transformations
+        return (petsc_raw.usable() and V0 == V1 and not V0.element.needs_dof_transformations
                 and V0.dofmap.index_map_bs == 1 and V0.dofmap.bs == 1
                 and set(J.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet})
 
@@ -272,40 +269,31 @@ class FastJacobian:
         # couplings without the Dirichlet rows and columns, plus their diagonal)
         fpetsc.assemble_matrix(self.A, J, bcs=self.bcs)
         self.A.assemble()
-        self.lib = _petsc_lib()
         self._structure()
 
     def create_matrix(self):
         return self.A
 
     def _structure(self):
-        lib, A = self.lib, self.A
-        if A.getType() == "seqaij":
-            self.diag, self.off = _SeqArrays(lib, A.handle), None
-            self.ghost_col = np.zeros(1, np.int32)
-        else:
-            Ad, Ao = ctypes.c_void_p(), ctypes.c_void_p()
-            colmap = ctypes.POINTER(ctypes.c_int32)()
-            assert lib.MatMPIAIJGetSeqAIJ(ctypes.c_void_p(A.handle), ctypes.byref(Ad), ctypes.byref(Ao),
-                                          ctypes.byref(colmap)) == 0
-            self.diag, self.off = _SeqArrays(lib, Ad.value), _SeqArrays(lib, Ao.value)
-            ncols_off = int(self.off.j.max()) + 1 if self.off.j.size else 0
-            garray = np.ctypeslib.as_array(colmap, shape=(ncols_off,)).copy() if ncols_off else np.zeros(0, np.int64)
-            im = self.V.dofmap.index_map
+        Ad, Ao, garray = petsc_raw.blocks(self.A)
+        self.diag = _Block(Ad)
+        self.off = _Block(Ao) if Ao is not None else None
+        self.ghost_col = np.zeros(1, np.int32)
+        im = self.V.dofmap.index_map
+        if self.off is not None:
             ghosts = np.asarray(im.ghosts, dtype=np.int64)
             pos = np.searchsorted(garray, ghosts)
-            found = (pos < len(garray)) & (garray[np.minimum(pos, max(len(garray) - 1, 0))] == ghosts) \
-                if len(garray) else np.zeros(len(ghosts), bool)
-            self.ghost_col = np.where(found, pos, -1).astype(np.int32) if len(ghosts) else np.zeros(1, np.int32)
+            ok = pos < len(garray)
+            ok[ok] = garray[pos[ok]] == ghosts[ok]
+            if len(ghosts):   # a ghost column no owned row references stays -1 (never searched for)
+                self.ghost_col = np.where(ok, pos, -1).astype(np.int32)
             self.l2g = im.local_to_global(np.arange(im.size_local + im.num_ghosts, dtype=np.int32)).astype(PETSc.IntType)
         # diagonal positions of the Dirichlet rows (1 on the diagonal, as DOLFINx's insert_diagonal)
         d = self.diag
         self.bc_diag = np.array([d.i[r] + np.flatnonzero(d.j[d.i[r]:d.i[r + 1]] == r)[0] for r in self.bc_rows],
                                 dtype=np.int64)
         # ghost-row buffer: every entry of the cells that touch a ghost row
-        touches = np.zeros(len(self.dofs) // self.nd, bool)
-        per_cell = self.dofs.reshape(-1, self.nd)
-        touches = (per_cell >= self.nown).any(axis=1)
+        touches = (self.dofs.reshape(-1, self.nd) >= self.nown).any(axis=1)
         ntouch = sum(int(np.count_nonzero(touches[cells])) for _, _, _, cells, _ in self.integrals)
         self.gcap = max(ntouch * self.nd * self.nd, 1)
         self.grow = np.zeros(self.gcap, np.int32)

@@ -43,6 +43,8 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from . import petsc_raw
+
 INTERIOR_SOLVERS = ("petsc", "superlu")
 _LIVE = weakref.WeakSet()
 
@@ -176,28 +178,44 @@ class InterfaceSchur:
 
     # -- the interface (once per nonzero pattern) ------------------------------------
     def _split(self, A):
+        """The interface G and the index sets of its blocks, from the matrix's nonzero structure.
+
+        Only the off-diagonal block (a few entries per interface) and integer passes over the
+        diagonal block's column indices are needed, not the values (cost O(nnz) once per run)."""
         comm = self.comm
         lo, hi = A.getOwnershipRange()
-        ranges = np.array(A.getOwnershipRanges())
-        indptr, cols, _ = A.getValuesCSR()
         n = hi - lo
-        rows = np.repeat(np.arange(n), np.diff(indptr))
-        off = (cols < lo) | (cols >= hi)
-        owner = np.searchsorted(ranges, cols[off], side="right") - 1
-        G = interface(comm.allgather(np.stack([rows[off] + lo, cols[off], owner], axis=1)))
+        ranges = np.array(A.getOwnershipRanges())
+        Ad, Ao, garray = petsc_raw.blocks(A)
+        if Ao is not None:
+            oi, oj = petsc_raw.rowij(Ao)
+            ocols = garray[oj]
+            orows = np.repeat(np.arange(n), np.diff(oi))
+        else:
+            ocols = orows = np.zeros(0, np.int64)
+        owner = np.searchsorted(ranges, ocols, side="right") - 1
+        G = interface(comm.allgather(np.stack([orows + lo, ocols, owner], axis=1)))
         self.G, self.nG = G, len(G)
         own = (G >= lo) & (G < hi)
         self.G_own = (G[own] - lo).astype(PETSc.IntType)   # local indices of the owned interface dofs
         self.G_own_pos = np.flatnonzero(own)                 # and their positions in G
         in_G = np.zeros(n, bool)
         in_G[self.G_own] = True
-        # interior rows coupled to interface columns (A_IG), and the interface columns they touch
-        touch = np.isin(cols, G) & ~in_G[rows]
-        self.R = np.unique(rows[touch])                       # local rows
-        self.ZG = np.unique(np.searchsorted(G, cols[touch]))  # positions in G
+        # interior rows with an entry in an interface column (A_IG), and those columns
+        di, dj = petsc_raw.rowij(Ad)
+        hit = np.flatnonzero(in_G[dj])
+        hit_rows = np.searchsorted(di, hit, side="right") - 1
+        hit_cols = dj[hit] + lo
+        ohit = np.flatnonzero(np.isin(ocols, G))
+        rows = np.concatenate([hit_rows, orows[ohit]]).astype(np.int64)
+        cols = np.concatenate([hit_cols, ocols[ohit]]).astype(np.int64)
+        interior = ~in_G[rows]
+        self.R = np.unique(rows[interior])                               # local rows
+        self.ZG = np.unique(np.searchsorted(G, cols[interior]))          # positions in G
         # interior columns of this rank that interface rows (of any rank) reference (A_GI)
-        gamma_rows = in_G[rows]
-        referenced = np.concatenate(comm.allgather(cols[gamma_rows]))
+        mine = [dj[di[r]:di[r + 1]] + lo for r in self.G_own]
+        mine += [ocols[oi[r]:oi[r + 1]] for r in self.G_own] if Ao is not None else []
+        referenced = np.concatenate(comm.allgather(np.concatenate(mine) if mine else np.zeros(0, np.int64)))
         referenced = np.unique(referenced[(referenced >= lo) & (referenced < hi)]) - lo
         self.C = referenced[~in_G[referenced]].astype(PETSc.IntType)   # local indices
         self.is_R = _is(self.R + lo)
@@ -281,12 +299,10 @@ class InterfaceSchur:
             self.ksp.setOperators(D)
             pc = self.ksp.getPC()
             pc.setReusePreconditioner(False)
-            try:   # a zero pivot shows as a failed solve (DIVERGED_PC_FAILED), not as an error
+            try:   # a zero pivot is a failed set-up, not an error
                 self.ksp.setUp()
                 pc.setReusePreconditioner(True)   # keep this factor when D's rows are restored
-                self.rhs.set(0.0)
-                self.ksp.solve(self.rhs, self.sol)
-                ok = self.ksp.getConvergedReason() >= 0
+                ok = not petsc_raw.pc_failed(pc)
             except PETSc.Error:
                 ok = False
             if self.comm.allreduce(ok, op=MPI.LAND):
