@@ -45,7 +45,7 @@ from petsc4py import PETSc
 
 from . import petsc_raw
 
-INTERIOR_SOLVERS = ("petsc", "superlu")
+INTERIOR_SOLVERS = ("petsc", "petsc-natural", "superlu")
 _LIVE = weakref.WeakSet()
 
 
@@ -237,6 +237,17 @@ class InterfaceSchur:
         pc.setFactorSolverType(self.solver)
         if self.solver == "petsc":
             pc.setFactorOrdering(self.ordering)
+        elif self.solver == "petsc-natural":   # rows swapped for nonzero pivots (saddle points)
+            pc.setFactorSolverType("petsc")
+            pc.setFactorOrdering("natural")
+            prefix = "rodfem_schur_local_"
+            self.ksp.setOptionsPrefix(prefix)
+            opts = PETSc.Options()
+            opts[prefix + "pc_factor_nonzeros_along_diagonal"] = 1e-12
+            try:
+                pc.setFromOptions()
+            finally:
+                opts.delValue(prefix + "pc_factor_nonzeros_along_diagonal")
 
     # -- a new Jacobian: local LU, Z and S -----------------------------------------------
     def _factor(self, A):
@@ -307,9 +318,10 @@ class InterfaceSchur:
                 ok = False
             if self.comm.allreduce(ok, op=MPI.LAND):
                 return True
-            if self.solver != "petsc":
+            following = {"petsc": "petsc-natural", "petsc-natural": "superlu"}
+            if self.solver not in following:
                 return False
-            self.solver = "superlu"
+            self.solver = following[self.solver]
             self._make_ksp()
 
     def _fall_back(self, pc):
