@@ -1,15 +1,20 @@
 """Newton's method for the step residual F(x_{n+1}) = 0 with a petsc4py SNES.
 
 Jacobian J = dF/dx_{n+1} from ufl.derivative; forms are compiled once and
-reused every step.  Direct LU: PETSc's own in serial (3x faster than MUMPS on
-these banded systems), MUMPS in parallel.  PETSc's LU does not pivot, so a
-zero pivot (saddle points: multipliers, zero densities in statics) makes it
-fail; the solver then switches once, for the rest of the run, to a pivoting
-LU (serial SuperLU, measured 1.45x faster than MUMPS on the 3D rod; MUMPS in
-parallel) and repeats the step (`Newton.linear_solver` tells which one ran).
-(Not superlu_dist: it crashes at exit on this stack.)  Every setting can be overridden
+reused every step; a single body's Jacobian is assembled by rodfem/fastassembly.py
+(DOLFINx's matrix, without its per-entry search).  Direct solves: in serial PETSc's
+own LU in RCM order (3x faster than MUMPS on these banded systems); in parallel
+the exact Schur complement over the rank interfaces of rodfem/linear_solver.py
+(MUMPS, the former parallel default, was 4-10x slower than serial and ran out of
+workspace at 10^4 elements).  PETSc's LU does not pivot, so a zero pivot (saddle
+points: multipliers, zero densities in statics) makes it fail; the serial solver
+then switches once, for the rest of the run, to a pivoting LU (SuperLU, measured
+1.45x faster than MUMPS on the 3D rod) and repeats the step; the parallel one does
+the same inside the ranks (`Newton.linear_solver` tells which one ran).  (Not
+superlu_dist: it crashes at exit on this stack.)  Every setting can be overridden
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
-``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
+``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``; MUMPS in parallel:
+``-rodfem_pc_type lu -rodfem_pc_factor_mat_solver_type mumps``).
 """
 import os
 import re

@@ -1,0 +1,264 @@
+"""Cost per time step against mesh size, serial and `mpirun -n 2` (issue 11).
+
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/scaling.py            # -> benchmarks/scaling.{csv,md,png}
+    OMP_NUM_THREADS=1 .venv/bin/python benchmarks/scaling.py --quick    # smaller sweep, one repeat
+
+Scenes: flying-spaghetti-2d (planar beam, 9 dofs per element, full Newton) and
+flying-spaghetti-3d (3D Cosserat rod, 72 dofs per element, the scene's chord Newton).  Each
+point is a fresh process (serial) or `mpirun -n 2`: the scene is built, WARM steps are run
+(first factorization, the parallel solver's set-up), then STEPS more are timed; the best of
+REPEATS processes is kept.  Reported per step: wall time, CPU time of the busiest rank,
+Newton iterations, the largest energy-balance error, peak memory per rank (ru_maxrss), and
+where the time goes (residual and Jacobian assembly, LU factorization, triangular solves,
+the parallel solver's interface work).  The machine load (1-minute load average) is written
+next to every point: the machine is shared, and a loaded machine makes `mpirun -n 2` (which
+needs both cores) look worse than it is.
+"""
+import argparse
+import csv
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+PYTHON = sys.executable
+
+PLANAR = "flying-spaghetti-2d"
+ROD = "flying-spaghetti-3d"
+SWEEP = {PLANAR: [1000, 3000, 10000, 30000, 100000], ROD: [100, 1024, 3000, 10000]}
+QUICK = {PLANAR: [1000, 10000], ROD: [100, 1024]}
+# (warm-up steps, timed steps) by size
+def steps_for(scene, n):
+    if scene == PLANAR:
+        return (2, 20) if n <= 3000 else (2, 10) if n <= 30000 else (1, 5)
+    return (2, 10) if n <= 1024 else (1, 3)
+
+
+# -- one measurement (run inside the process or under mpirun) ----------------------------------
+def worker(scene_name, n, warm, steps):
+    import numpy as np
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    from rodfem import run
+    from rodfem.scene import load
+
+    comm = MPI.COMM_WORLD
+    PETSc.Log.begin()
+    scene = load(scene_name)
+    p = scene.values({"n_elements": n})
+    problem = scene.build(p, comm=comm)
+    dt = p["dt"]
+    run(problem, dt, warm * dt)
+    nw = problem.newton
+    events = ("MatLUFactorNum", "MatLUFactorSym", "MatLUFactor", "MatSolve")
+    before = {e: PETSc.Log.Event(e).getPerfInfo()["time"] for e in events}
+    t_before = dict(nw.timings)
+    pc = nw.snes.getKSP().getPC()
+    ctx = pc.getPythonContext() if pc.getType() == "python" else None
+    pc_before = dict(getattr(ctx, "times", {}))
+    cpu0 = time.process_time()
+    res = run(problem, dt, (warm + steps) * dt)
+    cpu = time.process_time() - cpu0
+    after = {e: PETSc.Log.Event(e).getPerfInfo()["time"] for e in events}
+    d = {e: after[e] - before[e] for e in events}
+    part = {"F": nw.timings["F"] - t_before["F"], "J": nw.timings["J"] - t_before["J"],
+            "lu": d["MatLUFactorNum"] + d["MatLUFactorSym"] + d["MatLUFactor"], "solve": d["MatSolve"]}
+    if ctx is not None:   # Z: the local solves for the interface columns (part of MatSolve); S: the rest
+        delta = {k: ctx.times.get(k, 0.0) - pc_before.get(k, 0.0) for k in ctx.times}
+        part["Z"] = delta.get("Z", 0.0)
+        part["solve"] = max(part["solve"] - part["Z"], 0.0)
+        part["S"] = delta.get("S", 0.0) + delta.get("extract", 0.0)
+    its = res.column("newton_its")[1:]
+    H = res.column("H")
+    row = {"scene": scene_name, "elements": n, "dofs": problem.dofs, "ranks": comm.size,
+           "wall_ms": 1e3 * res.wall_time / steps,
+           "cpu_ms": 1e3 * comm.allreduce(cpu, op=MPI.MAX) / steps,
+           "newton_its": float(np.mean(its)),
+           "balance_rel": float(res.max_balance_error / max(np.max(np.abs(H)), 1e-300)),
+           "mem_mb": comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, op=MPI.MAX) / 1024,
+           "solver": nw.linear_solver,
+           **{f"{k}_ms": 1e3 * comm.allreduce(v, op=MPI.MAX) / steps for k, v in part.items()},
+           "final": {k: float(v) for k, v in res.rows[-1].items()}}
+    if comm.rank == 0:
+        print("RESULT " + json.dumps(row), flush=True)
+
+
+def measure(scene, n, ranks, repeats, timeout=3600):
+    warm, steps = steps_for(scene, n)
+    cmd = [PYTHON, os.path.abspath(__file__), "--worker", scene, str(n), str(warm), str(steps)]
+    if ranks > 1:
+        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "-n", str(ranks), *cmd]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    best = None
+    for _ in range(repeats):
+        load0 = os.getloadavg()[0]
+        p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout + 60)
+        load1 = os.getloadavg()[0]
+        lines = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
+        if p.returncode != 0 or not lines:
+            return {"scene": scene, "elements": n, "ranks": ranks, "failed": (p.stderr or p.stdout)[-500:]}
+        row = json.loads(lines[-1][7:])
+        row["load"] = max(load0, load1)
+        if best is None or row["wall_ms"] < best["wall_ms"]:
+            best = row
+    return best
+
+
+def small_step(repeats=5, steps=150):
+    """Serial ms per step of the 10-element planar beam (best of `repeats` runs of `steps` steps)."""
+    from mpi4py import MPI
+
+    from rodfem import run
+    from rodfem.scene import load
+    scene = load(PLANAR)
+    best = float("inf")
+    for _ in range(repeats):
+        p = scene.values({"n_elements": 10})
+        problem = scene.build(p, MPI.COMM_WORLD)
+        res = run(problem, p["dt"], steps * p["dt"])
+        best = min(best, 1e3 * res.wall_time / steps)
+    return best
+
+
+# -- the tables ------------------------------------------------------------------------------
+def fit_exponent(ns, ts):
+    import numpy as np
+    return float(np.polyfit(np.log(ns), np.log(ts), 1)[0])
+
+
+def history_match(a, b):
+    """Largest relative difference of the last history row between serial and parallel."""
+    worst = 0.0
+    for k, v in a["final"].items():
+        if k in b["final"] and k != "balance_error":
+            worst = max(worst, abs(v - b["final"][k]) / max(abs(v), 1.0))
+    return worst
+
+
+def write(rows, small, started, finished):
+    import numpy as np
+    fields = ["scene", "elements", "dofs", "ranks", "wall_ms", "cpu_ms", "newton_its", "balance_rel", "mem_mb",
+              "solver", "F_ms", "J_ms", "lu_ms", "solve_ms", "Z_ms", "S_ms", "load"]
+    with open(os.path.join(HERE, "scaling.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        w.writerows([r for r in rows if "failed" not in r])
+    by = {(r["scene"], r["elements"], r["ranks"]): r for r in rows}
+    lines = ["# Scaling: cost per time step against mesh size, serial and `mpirun -n 2` (issue 11)", "",
+             f"Measured {started} to {finished} on the shared 2-core machine (OMP_NUM_THREADS=1); "
+             "`load` is the 1-minute load average around the point (2 = both cores busy with other work). "
+             "ms/step is wall time, the best of the repeats; CPU is the busiest rank's process time. "
+             "Reproduce: `OMP_NUM_THREADS=1 .venv/bin/python benchmarks/scaling.py`.", ""]
+    for scene, title in ((PLANAR, "Planar beam (flying-spaghetti-2d, full Newton, dt = 0.1)"),
+                         (ROD, "3D Cosserat rod (flying-spaghetti-3d, chord Newton, dt = 0.1)")):
+        ns = sorted({r["elements"] for r in rows if r["scene"] == scene})
+        if not ns:
+            continue
+        lines += [f"## {title}", "",
+                  "| elements | dofs | serial ms/step | np2 ms/step | speed-up | serial CPU | np2 CPU (max rank) | "
+                  "Newton its | peak MB serial / per rank np2 | max balance error / max H | np2 vs serial | load s / np2 |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for n in ns:
+            s, p = by.get((scene, n, 1)), by.get((scene, n, 2))
+            if s is None or "failed" in s:
+                lines.append(f"| {n} | | failed | | | | | | | | | |")
+                continue
+            if p is None or "failed" in p:
+                pm = "failed" if p else "-"
+                lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {pm} | | {s['cpu_ms']:.1f} | | "
+                             f"{s['newton_its']:.2f} | {s['mem_mb']:.0f} | {s['balance_rel']:.1e} | | {s['load']:.1f} |")
+                continue
+            lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {p['wall_ms']:.1f} | "
+                         f"{s['wall_ms'] / p['wall_ms']:.2f} | {s['cpu_ms']:.1f} | {p['cpu_ms']:.1f} | "
+                         f"{s['newton_its']:.2f} / {p['newton_its']:.2f} | {s['mem_mb']:.0f} / {p['mem_mb']:.0f} | "
+                         f"{max(s['balance_rel'], p['balance_rel']):.1e} | {history_match(s, p):.1e} | "
+                         f"{s['load']:.1f} / {p['load']:.1f} |")
+        serial = [(n, by[(scene, n, 1)]) for n in ns if "failed" not in by.get((scene, n, 1), {"failed": 1})]
+        if scene == PLANAR and len(serial) >= 2:
+            big = [(n, r) for n, r in serial if n >= 1000]
+            e = fit_exponent([n for n, _ in big], [r["cpu_ms"] for _, r in big])
+            per = ", ".join(f"{1e3 * r['cpu_ms'] / n:.1f} at {n}" for n, r in big)
+            lines += ["", f"Serial CPU time per element and step (µs): {per}; fitted exponent of the CPU time "
+                          f"against n from {big[0][0]} to {big[-1][0]}: {e:.2f}."]
+        lines += ["", "Where the time goes (wall ms per step, serial / np2 busiest rank): residuals F, Jacobians J, "
+                      "LU factorization, triangular solves of Newton, the parallel solver's interface work (Z: the "
+                      "local solves for the interface columns, once per Jacobian; S: Schur complement, its "
+                      "allreduce and the interface values), rest (time loop, energy, observables, waiting):", "",
+                  "| elements | F | J | LU | solves | Z | S | rest |", "|---|---|---|---|---|---|---|---|"]
+        keys = ("F_ms", "J_ms", "lu_ms", "solve_ms", "Z_ms", "S_ms")
+        for n in ns:
+            cells = []
+            for key in keys:
+                vals = [by.get((scene, n, k), {}).get(key) for k in (1, 2)]
+                cells.append(" / ".join("-" if v is None else f"{v:.1f}" for v in vals))
+            rest = []
+            for k in (1, 2):
+                r = by.get((scene, n, k), {})
+                rest.append(f"{r['wall_ms'] - sum(r.get(x, 0.0) for x in keys):.1f}" if "wall_ms" in r else "-")
+            lines.append(f"| {n} | " + " | ".join(cells) + f" | {' / '.join(rest)} |")
+        lines.append("")
+    if small is not None:
+        lines += [f"10-element planar step (serial, best of 5 runs of 150 steps): {small:.3f} ms.", ""]
+    with open(os.path.join(HERE, "scaling.md"), "w") as f:
+        f.write("\n".join(lines))
+    print("\n".join(lines))
+    plot(rows)
+
+
+def plot(rows):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, (scene, title) in zip(axes, ((PLANAR, "planar beam"), (ROD, "3D Cosserat rod"))):
+        for ranks, style in ((1, "o-"), (2, "s--")):
+            pts = sorted((r["elements"], r["wall_ms"]) for r in rows
+                         if r["scene"] == scene and r["ranks"] == ranks and "failed" not in r)
+            if pts:
+                ax.loglog(*zip(*pts), style, label="serial" if ranks == 1 else "mpirun -n 2")
+        ax.set_xlabel("elements")
+        ax.set_ylabel("wall time per step (ms)")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(HERE, "scaling.png"), dpi=120)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--worker", nargs=4, metavar=("SCENE", "N", "WARM", "STEPS"))
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--only", choices=(PLANAR, ROD))
+    ap.add_argument("--max-elements", type=int, default=None)
+    args = ap.parse_args()
+    if args.worker:
+        scene, n, warm, steps = args.worker
+        worker(scene, int(n), int(warm), int(steps))
+        return
+    sweep = QUICK if args.quick else SWEEP
+    repeats = 1 if args.quick else args.repeats
+    started = time.strftime("%Y-%m-%d %H:%M")
+    rows = []
+    for scene, ns in sweep.items():
+        if args.only and scene != args.only:
+            continue
+        for n in ns:
+            if args.max_elements and n > args.max_elements:
+                continue
+            for ranks in (1, 2):
+                r = measure(scene, n, ranks, repeats if n < 30000 or scene == PLANAR else 1)
+                print(json.dumps({k: v for k, v in r.items() if k != "final"}), flush=True)
+                rows.append(r)
+    small = None if args.only == ROD else small_step()
+    write(rows, small, started, time.strftime("%Y-%m-%d %H:%M"))
+
+
+if __name__ == "__main__":
+    main()
