@@ -39,6 +39,29 @@ DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",
 # exact elimination over the rank interfaces of rodfem/linear_solver.py.
 SERIAL = {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"}
 PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.linear_solver.InterfaceSchur"}
+# After a failed factorization, the next LU: PETSc's (no pivoting) -> SuperLU (pivots) -> MUMPS.
+# SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4 elements, 1e8
+# nonzeros: "Not enough memory", and destroying that failed factor crashes): above
+# SUPERLU_NONZEROS the pivoting LU is MUMPS straight away.
+PIVOTING = {"petsc": "superlu", "superlu": "mumps"}
+SUPERLU_NONZEROS = 4e7
+
+
+def pivoting_lu(A, failed):
+    """The LU to use after `failed` failed on A (sequential AIJ or the local block of a rank)."""
+    following = PIVOTING[failed]
+    if following == "superlu" and A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"] > SUPERLU_NONZEROS:
+        following = "mumps"
+    return following
+
+
+def mumps_options(prefix):
+    """MUMPS with AMD ordering and 4x its workspace estimate (its default METIS ordering and
+    workspace failed on these chains at 10^4 elements), unless the user chose otherwise."""
+    opts = PETSc.Options()
+    for key, value in (("mat_mumps_icntl_7", 0), ("mat_mumps_icntl_14", 300)):
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
 
 
 class NewtonFailure(RuntimeError):
@@ -191,11 +214,14 @@ class Newton:
         except PETSc.Error as e:  # not a divergence (that is a converged reason), but PETSc giving up
             raise petsc_error(e, f"PETSc stopped at step {step} (t = {t:.6g})") from None
         reason = self.snes.getConvergedReason()
-        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
-            self.settings["pc_factor_mat_solver_type"] = "superlu" if self.snes.comm.size == 1 else "mumps"
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver in PIVOTING:
+            following = pivoting_lu(self.A, self.linear_solver) if self.snes.comm.size == 1 else "mumps"
+            self.settings["pc_factor_mat_solver_type"] = following
+            if following == "mumps":
+                mumps_options(self.prefix)
             pc = self.snes.getKSP().getPC()
             pc.reset()
-            pc.setFactorSolverType(self.settings["pc_factor_mat_solver_type"])
+            pc.setFactorSolverType(following)
             return self._solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
