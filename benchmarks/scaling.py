@@ -161,7 +161,8 @@ def write(rows, small, started, finished):
             continue
         lines += [f"## {title}", "",
                   "| elements | dofs | serial ms/step | np2 ms/step | speed-up | serial CPU | np2 CPU (max rank) | "
-                  "Newton its | peak MB serial / per rank np2 | max balance error / max H | np2 vs serial | load s / np2 |",
+                  "Newton its | peak MB serial / per rank np2 | max balance error / max H | np2 vs serial | "
+                  "load s / np2 |",
                   "|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for n in ns:
             s, p = by.get((scene, n, 1)), by.get((scene, n, 2))
@@ -171,7 +172,8 @@ def write(rows, small, started, finished):
             if p is None or "failed" in p:
                 pm = "failed" if p else "-"
                 lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {pm} | | {s['cpu_ms']:.1f} | | "
-                             f"{s['newton_its']:.2f} | {s['mem_mb']:.0f} | {s['balance_rel']:.1e} | | {s['load']:.1f} |")
+                             f"{s['newton_its']:.2f} | {s['mem_mb']:.0f} | {s['balance_rel']:.1e} | | "
+                             f"{s['load']:.1f} |")
                 continue
             lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {p['wall_ms']:.1f} | "
                          f"{s['wall_ms'] / p['wall_ms']:.2f} | {s['cpu_ms']:.1f} | {p['cpu_ms']:.1f} | "

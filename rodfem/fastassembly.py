@@ -287,7 +287,8 @@ class FastJacobian:
             ok[ok] = garray[pos[ok]] == ghosts[ok]
             if len(ghosts):   # a ghost column no owned row references stays -1 (never searched for)
                 self.ghost_col = np.where(ok, pos, -1).astype(np.int32)
-            self.l2g = im.local_to_global(np.arange(im.size_local + im.num_ghosts, dtype=np.int32)).astype(PETSc.IntType)
+            local = np.arange(im.size_local + im.num_ghosts, dtype=np.int32)
+            self.l2g = im.local_to_global(local).astype(PETSc.IntType)
         # diagonal positions of the Dirichlet rows (1 on the diagonal, as DOLFINx's insert_diagonal)
         d = self.diag
         self.bc_diag = np.array([d.i[r] + np.flatnonzero(d.j[d.i[r]:d.i[r + 1]] == r)[0] for r in self.bc_rows],

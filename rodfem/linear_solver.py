@@ -65,21 +65,6 @@ def _clean_up():
         PETSc.garbage_cleanup()
 
 
-def _is(indices, comm=PETSc.COMM_SELF):
-    return PETSc.IS().createGeneral(np.asarray(indices, dtype=PETSc.IntType), comm=comm)
-
-
-def _dense(M):
-    """A small sequential AIJ matrix as a dense numpy array."""
-    m, n = M.getSize()
-    out = np.zeros((m, n))
-    if m and n:
-        indptr, cols, vals = M.getValuesCSR()
-        rows = np.repeat(np.arange(m), np.diff(indptr))
-        np.add.at(out, (rows, cols), vals)
-    return out
-
-
 def interface(pairs_of_ranks):
     """The interface G: for each pair of ranks r < s, the coupled dofs of r or those of s, whichever
     are fewer.  `pairs_of_ranks[r]` lists (i, j, s) for each entry A_ij of rank r's rows with
@@ -162,14 +147,10 @@ class InterfaceSchur:
     def release(self):
         """Destroy the PETSc objects this context made (it sets itself up again when used)."""
         for obj in [self.ksp, self.fallback, getattr(self, "rhs", None), getattr(self, "sol", None),
-                    getattr(self, "B", None), getattr(self, "X", None),
-                    *(getattr(self, "subs", None) or [])]:
+                    getattr(self, "B", None), getattr(self, "X", None)]:
             if obj is not None:
                 obj.destroy()
-        for name in ("is_R", "is_G", "is_C", "is_Gown"):
-            if getattr(self, name, None) is not None:
-                getattr(self, name).destroy()
-        self.ksp = self.fallback = self.subs = None
+        self.ksp = self.fallback = self.B = self.X = None
         self.pattern = None
 
     def view(self, pc, viewer):
@@ -218,13 +199,14 @@ class InterfaceSchur:
         mine = [dj[di[r]:di[r + 1]] + lo for r in self.G_own]
         mine += [ocols[oi[r]:oi[r + 1]] for r in self.G_own] if Ao is not None else []
         referenced = np.concatenate(comm.allgather(np.concatenate(mine) if mine else np.zeros(0, np.int64)))
-        referenced = np.unique(referenced[(referenced >= lo) & (referenced < hi)]) - lo
-        self.C = referenced[~in_G[referenced]].astype(PETSc.IntType)   # local indices
-        self.is_R = _is(self.R + lo)
-        self.is_G = _is(G)
-        self.is_C = _is(self.C + lo)
-        self.is_Gown = _is(G[own])
-        self.subs = None
+        self.C_all = np.setdiff1d(np.unique(referenced), G).astype(PETSc.IntType)   # global, every rank's
+        mask = (self.C_all >= lo) & (self.C_all < hi)
+        self.C = (self.C_all[mask] - lo).astype(PETSc.IntType)            # this rank's, local indices
+        self.C_pos = np.flatnonzero(mask)                                  # their positions in C_all
+        self.rows_R = (self.R + lo).astype(PETSc.IntType)
+        self.rows_Gown = G[own].astype(PETSc.IntType)
+        self.cols_G = G.astype(PETSc.IntType)
+        self.cols_GC = np.concatenate([G, self.C_all]).astype(PETSc.IntType)
         self.B = self.X = None
         self.rhs = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
         self.sol = self.rhs.duplicate()
@@ -251,11 +233,14 @@ class InterfaceSchur:
     def _factor(self, A):
         """Factor the local block with its interface rows as identity rows; Z, S.  False: singular."""
         T, t0 = self.times, time.perf_counter()
-        if self.nG:
-            subs = A.createSubMatrices([self.is_R, self.is_G, self.is_Gown],
-                                       [self.is_G, self.is_C, self.is_G], submats=self.subs)
-            self.subs = subs
-            A_RG, self.AGC, A_GG_own = (_dense(M) for M in subs)
+        if self.nG:   # the interface rows (all ranks') and the interior rows next to the interface
+            block = np.zeros((self.nG, len(self.cols_GC)))
+            if len(self.rows_Gown):
+                block[self.G_own_pos] = A.getValues(self.rows_Gown, self.cols_GC)
+            block = self.comm.allreduce(block, op=MPI.SUM)
+            self.A_GG = block[:, :self.nG]
+            self.AGC = block[:, self.nG + self.C_pos]
+            A_RG = A.getValues(self.rows_R, self.cols_G) if len(self.rows_R) else np.zeros((0, self.nG))
         t1 = time.perf_counter()
         T["extract"] += t1 - t0
         D = A.getDiagonalBlock()
@@ -303,9 +288,8 @@ class InterfaceSchur:
         t5 = time.perf_counter()
         T["Z"] += t5 - t4
         S = np.zeros((self.nG, self.nG))
-        S[self.G_own_pos, :] = A_GG_own
-        S[:, self.ZG] -= self.AGC @ self.Z[self.C, :]
-        self.S = self.comm.allreduce(S, op=MPI.SUM)
+        S[:, self.ZG] = self.AGC @ self.Z[self.C, :]
+        self.S = self.A_GG - self.comm.allreduce(S, op=MPI.SUM)
         T["S"] += time.perf_counter() - t5
         return True
 
