@@ -125,6 +125,11 @@ def small_step(repeats=5, steps=150):
 
 
 # -- the tables ------------------------------------------------------------------------------
+BEFORE = ["Before (issue 11, same machine): planar serial 10–28 / 258 / 2734 ms per step at 10^3 / 10^4 / 10^5 "
+          "elements, `mpirun -n 2` 107 ms at 10^3 and DIVERGED_LINEAR_SOLVE at step 1 from 10^4 (MUMPS workspace); "
+          "3D rod serial 50 / 865 ms per step at 100 / 1024 elements, and serial failed at 10^4 (SuperLU out of "
+          "memory).", ""]
+
 def fit_exponent(ns, ts):
     import numpy as np
     return float(np.polyfit(np.log(ns), np.log(ts), 1)[0])
@@ -153,7 +158,9 @@ def write(rows, small, started, finished):
              "`load` is the 1-minute load average around the point (2 = both cores busy with other work). "
              "ms/step is wall time, the best of the repeats; CPU is the busiest rank's process time. "
              "Reproduce: `OMP_NUM_THREADS=1 .venv/bin/python benchmarks/scaling.py`.", ""]
-    for scene, title in ((PLANAR, "Planar beam (flying-spaghetti-2d, full Newton, dt = 0.1)"),
+    lines += BEFORE
+    for scene, title in ((PLANAR, "Planar beam (flying-spaghetti-2d, dt = 0.1; full Newton below 10^5 unknowns, "
+                                  "above it the Jacobian and its LU reused for two iterations)"),
                          (ROD, "3D Cosserat rod (flying-spaghetti-3d, chord Newton, dt = 0.1)")):
         ns = sorted({r["elements"] for r in rows if r["scene"] == scene})
         if not ns:

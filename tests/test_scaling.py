@@ -102,6 +102,28 @@ def test_fast_assembly_is_dolfinx_assembly():
         assert C.norm() == 0.0 and B.norm() > 0, scene
 
 
+def test_linear_time_collapse_is_dolfinx_collapse():
+    """StateSpace.collapse (built from the field's element, linear in n) puts every field where
+    DOLFINx's quadratic collapse does: the same dofs of W, the same interpolated values."""
+    from dolfinx import fem, mesh as dmesh
+
+    from forms.cosserat_rod import CosseratRod
+    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem.spaces import StateSpace
+    for model in (PlanarBeam(1.0, 1.0, quadratic(1.0, 1.0, 1.0), degree=2),
+                  CosseratRod(1.0, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0])):
+        S = StateSpace(dmesh.create_interval(MPI.COMM_WORLD, 17, [0.0, 2.0]), model.fields)
+        for f in S.fields:
+            def value(x, f=f):
+                return np.array([np.sin(3 * x[0] + k) for k in range(f.size)]) if f.shape else np.sin(3 * x[0])
+            got, want = fem.Function(S.V), fem.Function(S.V)
+            for u, (Vi, dofs) in ((got, S.collapse(f.name)), (want, S.sub(f.name).collapse())):
+                fi = fem.Function(Vi)
+                fi.interpolate(value)
+                u.x.array[dofs] = fi.x.array
+            assert np.array_equal(got.x.array, want.x.array), f.name
+
+
 def test_serial_lu_is_rcm_and_accurate():
     """The serial LU runs in RCM order: no zero pivot on the beam, and an accurate solve."""
     problem = built("flying-spaghetti-2d", 200)
