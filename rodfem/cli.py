@@ -5,6 +5,7 @@ Bad input ends with one line naming the parameter and what is allowed
 residual (exit code 3), keeping what was written.
 """
 import argparse
+import os
 import sys
 
 from mpi4py import MPI
@@ -61,6 +62,20 @@ def cmd_study(args):
     run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
 
 
+def cmd_static(args):
+    """rodfem static SCENE: the equilibrium of the discrete model under the loads at t (default t_end)."""
+    from .statics import run_static
+    out = args.out or os.path.join("results", args.scene + "-static")
+    _, result, summary = run_static(args.scene, parse_sets(args.set), out=out, t=args.time,
+                                    steps=args.load_steps, adaptive=not args.fixed_steps)
+    err = (f", error {summary['error_relative']:.3e} of the scale against the exact solution"
+           if summary.get("error_relative") is not None else "")
+    say(f"{summary['scene']}: static equilibrium at t = {summary['t']:g} in {summary['load_steps']} load steps "
+        f"({summary['load_steps_halved']} halved), {summary['newton_its']} Newton iterations, "
+        f"{summary['wall_time_s']:.2f} s{err}")
+    say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png")
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="rodfem", description="Port-Hamiltonian rods, beams and strings in FEniCSx.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -81,7 +96,20 @@ def parser():
     st.add_argument("--dt", type=float, nargs="+", help="time steps of the sweep")
     st.add_argument("--elements", type=int, nargs="+", help="element counts of the sweep")
     st.set_defaults(func=cmd_study)
+    add_static_parsers(sub)
     return ap
+
+
+def add_static_parsers(sub):
+    """Subcommands of statics, linearization and modes (issue 12)."""
+    sp = sub.add_parser("static", help="static equilibrium of a scene (Newton with load continuation)")
+    sp.add_argument("scene")
+    sp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    sp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE-static)")
+    sp.add_argument("--time", type=float, metavar="T", help="the loads at time T (default t_end: the full load)")
+    sp.add_argument("--load-steps", type=int, default=1, metavar="N", help="first load step 1/N (default 1)")
+    sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
+    sp.set_defaults(func=cmd_static)
 
 
 def main(argv=None):

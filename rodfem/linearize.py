@@ -1,0 +1,381 @@
+"""The linearized port-Hamiltonian model about a state, as sparse matrices; natural modes.
+
+The discrete model of one step is E (x_{n+1} - x_n)/h = f(x_{n+1/2}, u); its
+time-continuous form E x' = f(x, u) is linearized about a state x* (the
+initial state or a static equilibrium, rodfem/statics.py) and inputs u*:
+
+    E dx' = A dx + B du,        dy = C dx,        f0 = f(x*, u*) (zero at an equilibrium)
+
+E = dF/d(x') and A = -dF/dx come from the model's own residual (a `RestStep`
+whose rates are a separate field), B = -dF/du from the loads' input maps, C
+from their outputs y = B(x)^T z.  The supported dofs (Dirichlet rows) are
+removed.  With the constraints kept (rod orthonormality, zero compliances,
+massless directors) E is singular: the model is a port-Hamiltonian DAE.
+
+Port-Hamiltonian form (descriptor form of Beattie, Mehrmann, Xu, Zwart 2018):
+
+    E dx' = (J - R) Q dx + B du,    dy = B^T Q dx,    H_lin = 1/2 dx^T E^T Q dx,
+    J = -J^T,  R = R^T >= 0,  E^T Q = Q^T E >= 0
+
+with z = Q dx the co-energy (effort) variables, found field by field:
+velocities, stresses of the compliance form and multipliers are their own
+efforts; a strain s has z = W''(s) s, i.e. Q_ss = M_s^{-1} Hess_ss (the
+strain's mass matrix and the Hessian of H); a field with E = 0
+(multipliers, constrained stresses, massless velocities) has Q = I.  The
+positions q (pairs q' = v of model.kinematics) are not in H; about a
+pre-stressed state (hanging cable, loaded beam) their columns of A are the
+geometric stiffness, which becomes the Q_qq that makes A = (J - R) Q
+(E^T Q restricted to q is that stiffness, symmetric for conservative loads;
+`checks` reports the residual |A - (J - R) Q|, the asymmetry of E^T Q and
+|R|).  `Hess` is the plain Hessian of H at x* (without geometric stiffness).
+
+Modes: the nonzero eigenvalues of the pencil (A, E) are +-i omega.  The rate
+form also has one zero eigenvalue per strain (the compatibility invariants
+of the rate rows, e.g. C_N N - Pi Gamma(q)), which would swamp a
+shift-invert solver; so modes use the pencil (A_m, E_m) of the same model
+with the total-form rows of statics in place of the rate rows (strains
+algebraic: E_m = 0 on them; constraints on position level): the same
+nonzero spectrum without those zeros.  Solved with SLEPc (shift-invert
+about `target`, Krylov-Schur, SuperLU) or, for at most `DENSE_MAX` dofs or
+without slepc4py, with scipy's dense QZ (`solver='dense'`).
+
+Serial only (the exported matrices are assembled on one rank).
+"""
+import numpy as np
+import scipy.sparse as sp
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+
+from .problem import compile_forms
+from .scene import ParameterError
+from .statics import RestStep, rest_form
+
+DENSE_MAX = 1500
+
+
+def _csr(A):
+    """A PETSc matrix as a scipy CSR matrix (serial)."""
+    indptr, indices, data = A.getValuesCSR()
+    return sp.csr_matrix((data, indices, indptr), shape=A.getSize())
+
+
+def _matrix(form):
+    A = fpetsc.assemble_matrix(form)
+    A.assemble()
+    M = _csr(A)
+    A.destroy()
+    return M
+
+
+def _vector(form):
+    b = fpetsc.assemble_vector(form)
+    b.ghostUpdate(addv=__import__("petsc4py").PETSc.InsertMode.ADD, mode=__import__("petsc4py").PETSc.ScatterMode.REVERSE)
+    out = b.getArray().copy()
+    b.destroy()
+    return out
+
+
+class Linearization:
+    """The linear model of a Problem about its current state x_n (inputs as they are set now,
+    e.g. by a static solve); `reference`: the state of the total-form rows (default the
+    problem's initial state)."""
+
+    def __init__(self, problem, reference=None):
+        if isinstance(getattr(problem, "bodies", None), dict):
+            raise ParameterError("linearize and modes take one-body scenes (a System is not supported yet)")
+        if problem.comm.size > 1:
+            raise ParameterError("linearize and modes run on one process (no mpirun)")
+        self.problem = body = problem
+        S, model = body.space, body.model
+        self.X = fem.Function(S.V)
+        self.X.x.array[:] = body.x0.x.array
+        self.Xdot = fem.Function(S.V)
+        ref = reference if reference is not None else body.state0
+        F_rate = rest_form(body, self.X, ref, rates=self.Xdot, total=False)
+        F_tot = rest_form(body, self.X, ref, rates=self.Xdot, total=True)
+        H = model.hamiltonian(S.split(self.X), body.dx, body.ds)
+        step = RestStep(S.split(self.X))
+        test = S.split(ufl.TestFunction(S.V))
+        forms = {"E": ufl.derivative(F_rate, self.Xdot), "A": -ufl.derivative(F_rate, self.X),
+                 "Em": ufl.derivative(F_tot, self.Xdot), "Am": -ufl.derivative(F_tot, self.X),
+                 "Hess": ufl.derivative(ufl.derivative(H, self.X), self.X), "f0": -F_rate}
+        for k, load in enumerate(body.loads):
+            forms[f"B{k}"] = -load.input_map(step, test, body.dx, body.ds)
+            forms[f"C{k}"] = ufl.derivative(load.power(step, body.dx, body.ds), self.X)
+        c = compile_forms(forms)
+        full = {k: _matrix(c[k]) for k in ("E", "A", "Em", "Am", "Hess")}
+        f0 = _vector(c["f0"])
+        Bcols, Crows, self.inputs = [], [], []
+        for k, load in enumerate(body.loads):
+            saved = np.array(load.constant.value, dtype=float, copy=True)
+            for j in range(saved.size):
+                e = np.zeros(saved.size)
+                e[j] = 1.0
+                load.constant.value = e.reshape(saved.shape)
+                Bcols.append(_vector(c[f"B{k}"]))
+                Crows.append(_vector(c[f"C{k}"]))
+                self.inputs.append(f"{load.name}[{j}]" if saved.size > 1 else load.name)
+            load.constant.value = saved
+        n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
+        fixed = np.unique(np.concatenate([bc.dof_indices()[0] for bc in body.bcs])) if body.bcs else np.zeros(0, int)
+        self.free = np.setdiff1d(np.arange(n), fixed)
+        f = self.free
+        self.E, self.A, self.Em, self.Am, self.Hess = (full[k][f][:, f].tocsr() for k in ("E", "A", "Em", "Am", "Hess"))
+        self.f0 = f0[f]
+        self.B = (sp.csr_matrix(np.column_stack(Bcols)[f]) if Bcols else sp.csr_matrix((len(f), 0)))
+        self.C = (sp.csr_matrix(np.vstack(Crows)[:, f]) if Crows else sp.csr_matrix((0, len(f))))
+        self.states = self._describe()
+        self.J, self.R, self.Q, self.checks = ph_form(self)
+
+    # -- the ordering of the state ---------------------------------------------------
+    def _describe(self):
+        """One row per retained dof: (field, component, s, kind) in the order of the matrices."""
+        S = self.problem.space
+        n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
+        field = np.empty(n, dtype=object)
+        comp = np.zeros(n, dtype=int)
+        coord = np.zeros(n)
+        for fld in S.fields:
+            Vi, dofs = S.collapse(fld.name)
+            bs = Vi.dofmap.index_map_bs
+            xs = Vi.tabulate_dof_coordinates()[:, 0]
+            dofs = np.asarray(dofs)
+            ok = dofs < n
+            k = np.arange(len(dofs))
+            field[dofs[ok]] = fld.name
+            comp[dofs[ok]] = (k % bs)[ok]
+            coord[dofs[ok]] = xs[k // bs][ok]
+        kin = getattr(self.problem.model, "kinematics", {})
+        kinds = {q: "position" for q in kin}
+        kinds.update({v: "velocity" for v in kin.values()})
+        f = self.free
+        return [(field[i], int(comp[i]), float(coord[i]), kinds.get(field[i], "other")) for i in f]
+
+    def groups(self):
+        """{(field, component): indices into the retained dofs}."""
+        out = {}
+        for i, (name, c, _, _) in enumerate(self.states):
+            out.setdefault((name, c), []).append(i)
+        return {k: np.array(v) for k, v in out.items()}
+
+    # -- export ----------------------------------------------------------------------
+    def matrices(self):
+        return {"E": self.E, "J": self.J, "R": self.R, "Q": self.Q, "B": self.B, "C": self.C,
+                "A": self.A, "Hess": self.Hess, "E_modes": self.Em, "A_modes": self.Am}
+
+    def write(self, out, extra=None):
+        """E.npz, J.npz, ... (scipy.sparse.save_npz), linear.mat (MATLAB, all matrices, f0 and the
+        state description), states.csv, linear.json."""
+        import json
+        import os
+
+        import scipy.io
+        os.makedirs(out, exist_ok=True)
+        mats = self.matrices()
+        for k, M in mats.items():
+            sp.save_npz(os.path.join(out, f"{k}.npz"), sp.csr_matrix(M))
+        np.save(os.path.join(out, "f0.npy"), self.f0)
+        with open(os.path.join(out, "states.csv"), "w") as fh:
+            fh.write("index,field,component,s,kind\n")
+            for i, (name, c, s, kind) in enumerate(self.states):
+                fh.write(f"{i},{name},{c},{s!r},{kind}\n")
+        scipy.io.savemat(os.path.join(out, "linear.mat"),
+                         {**{k: sp.csc_matrix(M) for k, M in mats.items()}, "f0": self.f0[:, None],
+                          "state_field": np.array([s[0] for s in self.states], dtype=object),
+                          "state_component": np.array([s[1] for s in self.states], dtype=float),
+                          "state_s": np.array([s[2] for s in self.states]),
+                          "inputs": np.array(self.inputs, dtype=object)})
+        info = {"n_states": len(self.states), "n_inputs": self.B.shape[1], "inputs": self.inputs,
+                "sizes": {k: list(M.shape) for k, M in mats.items()},
+                "nnz": {k: int(sp.csr_matrix(M).nnz) for k, M in mats.items()},
+                "rank_E": None, "drift_norm": float(np.linalg.norm(self.f0)), "checks": self.checks,
+                "fields": sorted({s[0] for s in self.states}), **(extra or {})}
+        with open(os.path.join(out, "linear.json"), "w") as fh:
+            json.dump(info, fh, indent=2, default=float)
+        return info
+
+
+def _norm(M):
+    M = sp.csr_matrix(M)
+    return float(np.sqrt(M.multiply(M).sum())) if M.nnz else 0.0
+
+
+def ph_form(lin):
+    """(J, R, Q, checks) with A = (J - R) Q on the retained dofs (see the module docstring)."""
+    from scipy.sparse.linalg import spsolve
+    E, A, Hess = lin.E.tocsc(), lin.A.tocsc(), lin.Hess.tocsc()
+    n = E.shape[0]
+    groups = lin.groups()
+    kinds = {name: kind for name, _, _, kind in lin.states}
+    Q = sp.lil_matrix((n, n))
+    Qinv = sp.lil_matrix((n, n))
+    efforts, positions = [], []
+    for (name, _), g in groups.items():
+        if kinds[name] == "position":
+            positions.append(g)
+            continue
+        Eg, Hg = E[g][:, g], Hess[g][:, g]
+        if _norm(Eg) == 0.0:            # multipliers, constrained stresses, massless velocities: z = x
+            Qg, Qgi = sp.identity(len(g)), sp.identity(len(g))
+        else:
+            Qg = sp.csr_matrix(spsolve(Eg.tocsc(), Hg.tocsc()))
+            if _norm(Hg) == 0.0:
+                raise ParameterError(f"field {name} has E != 0 but no energy: cannot form Q")
+            Qgi = sp.csr_matrix(spsolve(Hg.tocsc(), Eg.tocsc()))
+        Q[np.ix_(g, g)] = Qg
+        Qinv[np.ix_(g, g)] = Qgi
+        efforts.append(g)
+    S = np.concatenate(efforts) if efforts else np.zeros(0, int)
+    P = np.concatenate(positions) if positions else np.zeros(0, int)
+    Qinv = Qinv.tocsc()
+    JR = sp.lil_matrix((n, n))
+    JR[:, S] = (A[:, S] @ Qinv[S][:, S]).tolil()
+    if len(P):
+        JR[:, P] = -(JR[P, :].T)                                  # skew completion: J_vq = -J_qv^T
+        JR = JR.tocsc()
+        JP = JR[:, P]
+        rows = np.unique(JP.nonzero()[0])
+        if len(rows) == len(P):
+            Q[np.ix_(P, P)] = sp.csr_matrix(spsolve(JP[rows].tocsc(), A[rows][:, P].tocsc()))
+    JR = sp.csr_matrix(JR)
+    Q = Q.tocsr()
+    J = 0.5 * (JR - JR.T)
+    R = -0.5 * (JR + JR.T)
+    EQ = (E.T @ Q).tocsr()
+    nA = _norm(A) or 1.0
+    checks = {"ph_residual": _norm(A - (J - R) @ Q) / nA,
+              "EtQ_asymmetry": _norm(EQ - EQ.T) / (_norm(EQ) or 1.0),
+              "R_norm": _norm(R) / nA,
+              "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0)}
+    J.eliminate_zeros()
+    R.eliminate_zeros()
+    return J.tocsr(), R.tocsr(), Q, checks
+
+
+# -- natural modes ----------------------------------------------------------------------------
+
+def natural_modes(lin, k=6, solver="auto", target=0.0):
+    """The k lowest natural angular frequencies omega (rad/s) and mode vectors (complex, retained
+    dofs) of the pencil (A_m, E_m).  Returns (omega, vectors, solver used)."""
+    n = lin.Em.shape[0]
+    if solver == "auto":
+        solver = "dense" if n <= DENSE_MAX or not _have_slepc() else "slepc"
+    if solver == "dense":
+        import scipy.linalg
+        w, V = scipy.linalg.eig(lin.Am.toarray(), lin.Em.toarray())
+        ok = np.isfinite(w)
+        w, V = w[ok], V[:, ok]
+    elif solver == "slepc":
+        w, V = _slepc(lin.Am, lin.Em, k, target)
+    else:
+        raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
+    scale = max(np.max(np.abs(w.imag)), 1.0) if len(w) else 1.0
+    keep = (w.imag > 1e-9 * scale) & (np.abs(w.real) <= 1e-6 * np.abs(w)) if len(w) else []
+    w, V = w[keep], V[:, keep]
+    order = np.argsort(w.imag)[:k]
+    return w.imag[order], V[:, order], solver
+
+
+def _have_slepc():
+    try:
+        import slepc4py  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+def _petsc(M):
+    from petsc4py import PETSc
+    M = sp.csr_matrix(M)
+    A = PETSc.Mat().createAIJ(size=M.shape, csr=(M.indptr.astype(PETSc.IntType), M.indices.astype(PETSc.IntType),
+                                                   M.data), comm=PETSc.COMM_SELF)
+    A.assemble()
+    return A
+
+
+def _slepc(Am, Em, k, target):
+    import slepc4py
+    slepc4py.init()
+    from slepc4py import SLEPc
+    A, B = _petsc(Am), _petsc(Em)
+    eps = SLEPc.EPS().create(comm=MPI.COMM_SELF)
+    eps.setOperators(A, B)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP)
+    eps.setDimensions(nev=2 * k + 4)
+    eps.setTarget(target)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    ksp = st.getKSP()
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("lu")
+    pc.setFactorSolverType("superlu")
+    eps.setTolerances(1e-12, 500)
+    eps.solve()
+    vals, vecs = [], []
+    vr, vi = A.createVecs()
+    for i in range(eps.getConverged()):
+        lam = eps.getEigenpair(i, vr, vi)
+        vals.append(lam)
+        vecs.append(vr.getArray().copy() + 1j * vi.getArray().copy())
+    for obj in (eps, A, B, vr, vi):
+        obj.destroy()
+    return np.array(vals, dtype=complex), (np.column_stack(vecs) if vecs else np.zeros((Am.shape[0], 0), complex))
+
+
+def mode_shapes(lin, vectors):
+    """Per mode: (s, reference positions[n, d], displacement[n, d]) of the centreline, the
+    displacement normalised to max |dr| = 1 (real: the phase of its largest entry removed)."""
+    model = lin.problem.model
+    pos = model.position
+    S = lin.problem.space
+    Vi, dofs = S.collapse(pos)
+    bs = Vi.dofmap.index_map_bs
+    nloc = Vi.dofmap.index_map.size_local
+    s = Vi.tabulate_dof_coordinates()[:nloc, 0]
+    order = np.argsort(s)
+    where = {int(d): i for i, d in enumerate(lin.free)}
+    ref = lin.X.x.array[np.asarray(dofs)].reshape(-1, bs)[:nloc][order]
+    shapes = []
+    for m in range(vectors.shape[1]):
+        v = vectors[:, m]
+        full = np.zeros(len(dofs), dtype=complex)
+        for k, d in enumerate(dofs):
+            i = where.get(int(d))
+            if i is not None:
+                full[k] = v[i]
+        dr = full.reshape(-1, bs)[:nloc][order]
+        big = dr.flat[np.argmax(np.abs(dr))]
+        dr = (dr / big).real if big != 0 else dr.real
+        shapes.append(dr / (np.max(np.abs(dr)) or 1.0))
+    return s[order], ref, shapes
+
+
+def plot_modes(path, s, ref, shapes, omega, amplitude=None):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    n = len(shapes)
+    L = float(s.max() - s.min()) or 1.0
+    a = amplitude or 0.1 * L
+    d = ref.shape[1]
+    # the plane of the picture: the two coordinates in which reference + modes vary most
+    spread = np.ptp(np.concatenate([ref] + [ref + a * x for x in shapes]), axis=0)
+    ax2 = sorted(np.argsort(spread)[-2:]) if d > 2 else [0, 1]
+    fig, axes = plt.subplots(1, max(n, 1), figsize=(3.2 * max(n, 1), 3.4), squeeze=False)
+    for k in range(n):
+        ax = axes[0, k]
+        ax.plot(ref[:, ax2[0]], ref[:, ax2[1]], "k--", lw=1)
+        for sign, style in ((1, "-"), (-1, ":")):
+            x = ref + sign * a * shapes[k]
+            ax.plot(x[:, ax2[0]], x[:, ax2[1]], style, color="C0", lw=1.5)
+        ax.set_title(f"mode {k + 1}: {omega[k] / (2 * np.pi):.4g} Hz")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("xyz"[ax2[0]])
+        ax.set_ylabel("xyz"[ax2[1]])
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
