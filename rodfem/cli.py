@@ -76,6 +76,33 @@ def cmd_static(args):
     say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png")
 
 
+def cmd_linearize(args):
+    """rodfem linearize SCENE --out DIR: E, J, R, Q, B, C (.npz, .mat) about an equilibrium or the initial state."""
+    from .linearize import run_linearize
+    out = args.out or os.path.join("results", args.scene + "-linear")
+    info = run_linearize(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time)
+    c = info["checks"]
+    say(f"{info['scene']}: linear model about the {args.about} state at t = {args.time:g}: "
+        f"{info['n_states']} states, {info['n_inputs']} inputs; |A - (J - R) Q| = {c['ph_residual']:.1e} |A|, "
+        f"|f0| = {info['drift_norm']:.1e}")
+    say(f"results in {out}/: E.npz J.npz R.npz Q.npz B.npz C.npz A.npz Hess.npz (scipy.sparse.load_npz), "
+        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json")
+
+
+def cmd_modes(args):
+    """rodfem modes SCENE: natural frequencies and mode shapes of the linearized model."""
+    from .linearize import run_modes
+    out = args.out or os.path.join("results", args.scene + "-modes")
+    omega, info = run_modes(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time,
+                            count=args.count, solver=args.solver)
+    say(f"{info['scene']}: {len(omega)} modes about the {args.about} state ({info['solver']} eigensolver, "
+        f"{info['n_states']} states)")
+    say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s}")
+    for k, w in enumerate(omega):
+        say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g}")
+    say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz")
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="rodfem", description="Port-Hamiltonian rods, beams and strings in FEniCSx.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -110,6 +137,20 @@ def add_static_parsers(sub):
     sp.add_argument("--load-steps", type=int, default=1, metavar="N", help="first load step 1/N (default 1)")
     sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
     sp.set_defaults(func=cmd_static)
+    for name, func, what in (("linearize", cmd_linearize, "linear PH model E, J, R, Q, B, C of a scene (.npz, .mat)"),
+                             ("modes", cmd_modes, "natural frequencies and mode shapes of a scene")):
+        lp = sub.add_parser(name, help=what)
+        lp.add_argument("scene")
+        lp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+        lp.add_argument("--out", metavar="DIR", help=f"output directory (default results/SCENE-{'linear' if name == 'linearize' else 'modes'})")
+        lp.add_argument("--about", default="static", choices=("static", "initial"),
+                        help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
+        lp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
+        if name == "modes":
+            lp.add_argument("--count", type=int, default=6, metavar="K", help="number of modes (default 6)")
+            lp.add_argument("--solver", default="auto", choices=("auto", "slepc", "dense"),
+                            help="SLEPc shift-invert, or scipy's dense QZ (auto: dense up to 1500 states)")
+        lp.set_defaults(func=func)
 
 
 def main(argv=None):

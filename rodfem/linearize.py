@@ -379,3 +379,77 @@ def plot_modes(path, s, ref, shapes, omega, amplitude=None):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+# -- a scene's linear model and modes (rodfem linearize / rodfem modes) -------------------------
+
+ABOUT = ("static", "initial")
+
+
+def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=1):
+    """Build `scene` and put it in the state to linearize about: its static equilibrium under the
+    inputs at time t ('static', the default) or its initial state with the inputs at t
+    ('initial'; not an equilibrium in general: then f0 != 0).  Returns (scene, p, Linearization)."""
+    from .scene import Scene, load
+    from .statics import Statics
+    comm = comm or MPI.COMM_WORLD
+    if about not in ABOUT:
+        raise ParameterError(f"--about must be one of {', '.join(ABOUT)} (got {about!r})")
+    if comm.size > 1:
+        raise ParameterError("linearize and modes run on one process (no mpirun)")
+    if not isinstance(scene, Scene):
+        scene = load(scene)
+    p = scene.values(overrides)
+    problem = scene.build(p, comm)
+    if isinstance(getattr(problem, "bodies", None), dict):
+        raise ParameterError(f"scene {scene.name} is a multibody system: linearize and modes take "
+                             "one-body scenes (systems are not supported yet)")
+    ref = None
+    if about == "static":
+        statics = Statics(problem)
+        statics.solve(t, load_steps)
+        ref = statics.refs[""]
+    else:
+        for load in problem.loads:
+            load.update(t)
+    return scene, p, Linearization(problem, reference=ref)
+
+
+def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
+    """`rodfem linearize`: the matrices into `out`; returns the linear.json content."""
+    import time
+    t0 = time.perf_counter()
+    scene, p, lin = prepare(scene, overrides, about, t)
+    from . import __version__
+    extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
+             "wall_time_s": time.perf_counter() - t0, "form": "E dx' = (J - R) Q dx + B du, dy = B^T Q dx "
+             "(= C dx); A = (J - R) Q; Hess: Hessian of H; E_modes, A_modes: the total-form pencil of modes"}
+    return lin.write(out, extra) if out else extra
+
+
+def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, solver="auto"):
+    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info)."""
+    import json
+    import os
+    import time
+    if count < 1:
+        raise ParameterError(f"--count must be an integer >= 1 (got {count})")
+    t0 = time.perf_counter()
+    scene, p, lin = prepare(scene, overrides, about, t)
+    omega, vectors, used = natural_modes(lin, count, solver)
+    info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
+            "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
+            "parameters": p, "wall_time_s": time.perf_counter() - t0}
+    if out:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "modes.csv"), "w") as fh:
+            fh.write("mode,omega_rad_s,f_Hz,period_s\n")
+            for k, w in enumerate(omega):
+                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r}\n")
+        with open(os.path.join(out, "modes.json"), "w") as fh:
+            json.dump(info, fh, indent=2, default=float)
+        if len(omega):
+            s, ref, shapes = mode_shapes(lin, vectors)
+            plot_modes(os.path.join(out, "modes.png"), s, ref, shapes[: min(len(shapes), 4)], omega)
+            np.savez(os.path.join(out, "mode_shapes.npz"), s=s, reference=ref, shapes=np.array(shapes), omega=omega)
+    return omega, info
