@@ -48,8 +48,11 @@ def cmd_show(args):
 
 def cmd_run(args):
     from .driver import default_out, run_scene
-    out = args.out or default_out(args.scene)
-    result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet)
+    if args.scene is None and not args.resume:
+        raise ParameterError("run needs a SCENE (or --resume DIR)")
+    out = args.out or args.resume or default_out(args.scene)
+    result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet,
+                                resume=args.resume)
     say(f"{summary['scene']}: {summary['steps']} steps in {summary['wall_time_s']:.2f} s "
         f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
         f"max |H_n+1 - H_n - h y.u| = {summary['max_balance_error']:.2e} "
@@ -111,7 +114,9 @@ def parser():
     sp.add_argument("scene")
     sp.set_defaults(func=cmd_show)
     rp = sub.add_parser("run", help="run a scene")
-    rp.add_argument("scene")
+    rp.add_argument("scene", nargs="?")
+    rp.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its checkpoint "
+                    "(written with --set checkpoint_every=N)")
     rp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
     rp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE)")
     rp.add_argument("--quiet", action="store_true", help="no progress bar")

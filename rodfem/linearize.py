@@ -173,7 +173,9 @@ class Linearization:
 
         import scipy.io
         os.makedirs(out, exist_ok=True)
-        mats = self.matrices()
+        mats = {k: sp.csr_matrix(M) for k, M in self.matrices().items()}
+        for M in mats.values():
+            M.eliminate_zeros()
         for k, M in mats.items():
             sp.save_npz(os.path.join(out, f"{k}.npz"), sp.csr_matrix(M))
         np.save(os.path.join(out, "f0.npy"), self.f0)

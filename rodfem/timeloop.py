@@ -33,8 +33,13 @@ def steps_for(dt, t_end):
     return n
 
 
-def run(problem, dt, t_end, writer=None, progress=False, result=None):
+def run(problem, dt, t_end, writer=None, progress=False, result=None, start=None, after_step=None):
     """Integrate `problem` from t = 0 to t_end with step dt.
+
+    Restart (rodfem/checkpoint.py): `start` (with .step, .H, .supplied, .previous) continues a
+    run whose state x_n at step `start.step` is already in the problem, with the loop's own
+    state as it was (no row for t_n is written again); `after_step(n, previous, H, supplied)`
+    is called after every accepted step n (checkpoints).
 
     `writer` (optional) receives every row (`writer.record(row, problem)`);
     on Newton failure the history written so far stays on disk (and in
@@ -43,20 +48,24 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
     n_steps = steps_for(dt, t_end)
     problem.h.value = dt
     res = result if result is not None else Result()
-    H = problem.hamiltonian()
-    row = {"t": 0.0, "H": H, "supplied": 0.0, "newton_its": 0, "balance_error": 0.0, **problem.observe()}
-    res.rows.append(row)
-    if writer:
-        writer.record(row, problem)
+    first = start.step if start is not None else 0
+    if start is None:
+        H = problem.hamiltonian()
+        row = {"t": 0.0, "H": H, "supplied": 0.0, "newton_its": 0, "balance_error": 0.0, **problem.observe()}
+        res.rows.append(row)
+        if writer:
+            writer.record(row, problem)
     bar = None
     if progress and problem.comm.rank == 0:
         from tqdm import tqdm
-        bar = tqdm(total=n_steps, unit="step", dynamic_ncols=True)
+        bar = tqdm(total=n_steps, initial=first, unit="step", dynamic_ncols=True)
     supplied = 0.0
     previous = None  # x_{n-1}, for the Newton start x_{n+1}^0 = 2 x_n - x_{n-1}
+    if start is not None:
+        H, supplied, previous = start.H, start.supplied, start.previous
     t0 = time.perf_counter()
     try:
-        for n in range(n_steps):
+        for n in range(first, n_steps):
             t = n * dt
             problem.set_time(t + 0.5 * dt)
             try:
@@ -80,6 +89,8 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
             res.steps = n + 1
             if writer:
                 writer.record(row, problem)
+            if after_step:
+                after_step(n + 1, previous, H, supplied)
             if bar:
                 bar.update()
     finally:
