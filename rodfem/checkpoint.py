@@ -128,6 +128,8 @@ class _Layout:
     def __init__(self, problem):
         self.problem = problem
         self.system = isinstance(getattr(problem, "bodies", None), dict)
+        if self.system:
+            problem.build()
 
     def current(self):
         if not self.system:
@@ -186,6 +188,14 @@ class Saver:
         save(self.out, self.problem, self.layout, n, previous, H, supplied,
              {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every})
         fresh_newton(self.problem)
+        if self.comm.rank == 0 and n != self.n_steps:   # how far it got, if it is killed now
+            status = {"scene": self.scene, "status": "running", "steps": n, "t": n * float(self.problem.h.value),
+                      "n_steps": self.n_steps, "checkpoint": {"step": n, "file": NAME},
+                      "resume": f"rodfem run --resume {self.out}", "parameters": self.params}
+            path = os.path.join(self.out, "summary.json")
+            with open(path + ".tmp", "w") as f:
+                json.dump(status, f, indent=2, default=float)
+            os.replace(path + ".tmp", path)
 
 
 def save(out, problem, layout, n, previous, H, supplied, meta):
@@ -219,14 +229,17 @@ def save(out, problem, layout, n, previous, H, supplied, meta):
 
 
 def fresh_newton(problem):
-    """A new SNES (same assembler, settings and matrices' layout), as a resumed run has: the
-    chord Newton's lagged Jacobian then restarts at the same step in both runs."""
-    from .newton import Newton
-    old = problem.newton
-    new = Newton(assembler=old.assembler, options=dict(old.settings), prefix=old.prefix)
-    new.timings = old.timings
-    old.snes.destroy()
-    problem.newton = new
+    """A new SNES (same settings, same matrix and vectors), as a resumed run has: the chord
+    Newton's lagged Jacobian then restarts at the same step in both runs."""
+    from petsc4py import PETSc
+    nw = problem.newton
+    snes = PETSc.SNES().create(nw.snes.comm)
+    snes.setOptionsPrefix(nw.prefix)
+    snes.setFunction(nw._residual, nw.b)
+    snes.setJacobian(nw._jacobian, nw.A)
+    nw.snes.destroy()
+    nw.snes = snes
+    nw._configure(nw.settings)
 
 
 # -- reading ---------------------------------------------------------------------------------------
