@@ -213,7 +213,7 @@ def ph_form(lin):
     kinds = {name: kind for name, _, _, kind in lin.states}
     Q = sp.lil_matrix((n, n))
     Qinv = sp.lil_matrix((n, n))
-    efforts, positions = [], []
+    efforts, positions, algebraic = [], [], []
     for (name, _), g in groups.items():
         if kinds[name] == "position":
             positions.append(g)
@@ -221,6 +221,8 @@ def ph_form(lin):
         Eg, Hg = E[g][:, g], Hess[g][:, g]
         if _norm(Eg) == 0.0:            # multipliers, constrained stresses, massless velocities: z = x
             Qg, Qgi = sp.identity(len(g)), sp.identity(len(g))
+            if kinds[name] != "velocity":   # a massless velocity's row is a balance: its sign is fixed
+                algebraic.append((name, g))
         else:
             Qg = sp.csr_matrix(spsolve(Eg.tocsc(), Hg.tocsc()))
             if _norm(Hg) == 0.0:
@@ -242,6 +244,21 @@ def ph_form(lin):
         if len(rows) == len(P):
             Q[np.ix_(P, P)] = sp.csr_matrix(spsolve(JP[rows].tocsc(), A[rows][:, P].tocsc()))
     JR = sp.csr_matrix(JR)
+    # An algebraic row (E = 0) may be written with either sign (0 = G w or 0 = -G w): take the one
+    # that makes the interconnection skew (the rod's and rigid body's constraint rows are written
+    # +G w, the transpose of their reactions +G^T lambda); A, B and f0 are negated there too.
+    negated = []
+    for name, g in algebraic:
+        rows, cols = JR[g, :], JR[:, g].T
+        if _norm(rows - cols) < _norm(rows + cols):
+            D = sp.identity(n, format="lil")
+            D[g, g] = -1.0
+            D = D.tocsr()
+            JR = D @ JR
+            lin.A, lin.B, lin.E = (D @ lin.A).tocsr(), (D @ lin.B).tocsr(), (D @ lin.E).tocsr()
+            lin.f0 = D @ lin.f0
+            negated.append(name)
+    A = lin.A.tocsc()
     Q = Q.tocsr()
     J = 0.5 * (JR - JR.T)
     R = -0.5 * (JR + JR.T)
@@ -250,7 +267,8 @@ def ph_form(lin):
     checks = {"ph_residual": _norm(A - (J - R) @ Q) / nA,
               "EtQ_asymmetry": _norm(EQ - EQ.T) / (_norm(EQ) or 1.0),
               "R_norm": _norm(R) / nA,
-              "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0)}
+              "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0),
+              "rows_negated": sorted(set(negated))}
     J.eliminate_zeros()
     R.eliminate_zeros()
     return J.tocsr(), R.tocsr(), Q, checks
@@ -274,7 +292,7 @@ def natural_modes(lin, k=6, solver="auto", target=0.0):
     else:
         raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
     scale = max(np.max(np.abs(w.imag)), 1.0) if len(w) else 1.0
-    keep = (w.imag > 1e-9 * scale) & (np.abs(w.real) <= 1e-6 * np.abs(w)) if len(w) else []
+    keep = (w.imag > 1e-9 * scale) & (np.abs(w.real) <= 1e-3 * np.abs(w)) if len(w) else []
     w, V = w[keep], V[:, keep]
     order = np.argsort(w.imag)[:k]
     return w.imag[order], V[:, order], solver
