@@ -1,8 +1,9 @@
 """Checkpoint and restart: a run continued from its last checkpoint repeats the uninterrupted one bit by bit.
 
 ``rodfem run SCENE --set checkpoint_every=N --out DIR`` writes DIR/checkpoint.npz
-after every N-th step and after the last one (written to a temporary file and
-renamed, so a kill at any moment leaves the previous checkpoint whole).  It
+after every N-th step (written to a temporary file and renamed, so a kill at
+any moment leaves the previous checkpoint whole) and summary.json with status
+"running" and the step reached.  It
 holds everything the next step depends on:
 
 * the state x_n of every body (all fields) and the system's multipliers,
@@ -174,16 +175,19 @@ def _gather_lam(comm, lam):
 # -- writing -------------------------------------------------------------------------------------
 
 class Saver:
-    """`after_step` of the time loop: the checkpoint after every `every`-th step and the last one."""
+    """`after_step` of the time loop: the checkpoint after every `every`-th step (only there: a
+    resumed run restarts Newton where the uninterrupted one did)."""
 
     def __init__(self, out, scene_name, params, problem, every, n_steps):
         self.out, self.scene, self.params, self.problem = out, scene_name, params, problem
         self.every, self.n_steps = int(every), n_steps
         self.layout = _Layout(problem)
         self.comm = problem.comm
+        if self.comm.size > 1:
+            deterministic_solver(problem)
 
     def __call__(self, n, previous, H, supplied):
-        if n % self.every and n != self.n_steps:
+        if n % self.every:
             return
         save(self.out, self.problem, self.layout, n, previous, H, supplied,
              {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every})
@@ -226,6 +230,25 @@ def save(out, problem, layout, n, previous, H, supplied, meta):
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)
+
+
+def deterministic_solver(problem):
+    """Under MPI, factor with SuperLU on every rank (PCREDUNDANT) instead of MUMPS, unless the user
+    chose the preconditioner (-rodfem_pc_type): MUMPS's parallel factorization is not bitwise
+    reproducible from run to run (its dynamic scheduling; measured: 1 of 4 identical
+    `mpirun -n 2` four-bar runs differed in the last bit at step 3), so a resumed run could not
+    repeat the uninterrupted one.  Each rank then factors the whole matrix: cheap at rod sizes."""
+    from petsc4py import PETSc
+    nw = problem.newton
+    opts = PETSc.Options()
+    if opts.hasName(nw.prefix + "pc_type"):
+        return
+    nw.settings["pc_type"] = "redundant"
+    # the inner solver reads its options when it is set up (at the first solve): they stay
+    for key, value in (("redundant_pc_type", "lu"), ("redundant_pc_factor_mat_solver_type", "superlu")):
+        if not opts.hasName(nw.prefix + key):
+            opts[nw.prefix + key] = value
+    fresh_newton(problem)
 
 
 def fresh_newton(problem):
@@ -307,8 +330,8 @@ def restore(problem, meta, arrays):
     else:
         problem.x0.x.array[:] = x
         problem.x1.x.array[:] = x
-    solver = meta.get("linear_solver")
-    if solver and solver != problem.newton.settings.get("pc_factor_mat_solver_type"):
+    solver = meta.get("linear_solver")    # a switch after a zero pivot (same number of ranks only)
+    if solver and meta.get("mpi_ranks") == comm.size and solver != problem.newton.settings.get("pc_factor_mat_solver_type"):
         problem.newton.settings["pc_factor_mat_solver_type"] = solver
         fresh_newton(problem)
     comm.Barrier()
