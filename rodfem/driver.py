@@ -37,6 +37,8 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         raise ParameterError(f"parameter 'dt': {e}") from None
     problem = scene.build(p, comm)
     start = checkpoint.restore(problem, *saved) if saved else None
+    if start and start.step == 0:   # a static equilibrium (rodfem static): a new run starting from it
+        start = None
     if start and out:
         result = Result(rows=checkpoint.truncate_history(out, start.step) if comm.rank == 0 else [], steps=start.step)
         writer = checkpoint.writer_for(out, problem, n_steps, p.get("frames", 100), start.step, start.t)

@@ -331,7 +331,9 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     Writes into `out` (if given): summary.json (load steps, Newton iterations, the observables
     at equilibrium and, for scenes with an exact solution, the error against it), loadsteps.csv
     (mu, Newton iterations, residual per load step), centreline.pvd (the initial and the
-    equilibrium shape) and shapes.png.  Returns (problem, StaticResult, summary)."""
+    equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as the state at step 0,
+    from which ``rodfem run --resume out`` starts a dynamic run (at rest, pre-stressed).
+    Returns (problem, StaticResult, summary)."""
     import json
     import os
     import time
@@ -370,6 +372,10 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
         summary["reference"] = ref
         summary["error"] = max(errs.values()) if errs else None
         summary["error_relative"] = summary["error"] / scale if errs else None
+    if out:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
+        from . import checkpoint
+        checkpoint.save(out, problem, checkpoint._Layout(problem), 0, None, problem.hamiltonian(), 0.0,
+                        {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
     if writer:
         writer.frame(1.0)
         if comm.rank == 0:

@@ -110,3 +110,19 @@ def test_a_free_beam_has_no_equilibrium_one_line_error(rodfem):
     assert p.returncode == 3, p.stderr
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "static solve failed" in lines[0], p.stderr
+
+
+def test_cli_static_then_run_from_the_equilibrium(tmp_path):
+    """`rodfem static` leaves the equilibrium as a step-0 checkpoint; `rodfem run --resume` starts a
+    dynamic run from it: the cantilever sagging under gravity stays at rest (pre-stressed start)."""
+    st, dyn = tmp_path / "static", tmp_path / "dynamic"
+    sets = ["--set", "g=9.81", "--set", "fy=0", "--set", "n_elements=8", "--set", "t_end=0.02"]
+    assert main(["static", "cantilever-2d", *sets, "--time", "0", "--out", str(st)]) == 0
+    assert main(["run", "--resume", str(st), "--out", str(dyn), "--quiet"]) == 0
+    import csv
+    with open(dyn / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    tip = np.array([float(r["tip_y"]) for r in rows])
+    H = np.array([float(r["H"]) for r in rows])
+    assert len(rows) == 21 and tip[0] < -1e-4                      # it sags ...
+    assert np.max(np.abs(tip - tip[0])) <= 1e-12 and np.max(np.abs(H - H[0])) <= 1e-9 * H[0]   # ... at rest
