@@ -56,9 +56,11 @@ class StaticFailure(NewtonFailure):
 
     def __init__(self, mu, step, residual, iterations, reason):
         self.mu = mu
-        RuntimeError.__init__(self, f"static solve failed at load factor {mu:.6g} (load step {step:.3g} "
-                                    f"below the minimum): residual {residual:.3e} after {iterations} "
-                                    f"Newton iterations ({reason})")
+        why = (f"the tangent matrix is singular ({reason}): a free rigid motion or a mechanism has no "
+               "unique equilibrium" if reason == "DIVERGED_LINEAR_SOLVE" else
+               f"load step {step:.3g} below the minimum: residual {residual:.3e} after {iterations} "
+               f"Newton iterations ({reason})")
+        RuntimeError.__init__(self, f"static solve failed at load factor {mu:.6g}: {why}")
         self.step, self.t, self.residual, self.iterations, self.reason = 0, mu, residual, iterations, reason
 
 
@@ -196,7 +198,7 @@ class Statics:
         self.unknown.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     # -- Newton with load continuation ------------------------------------------------
-    def solve(self, t=0.0, steps=1, adaptive=True, min_step=1e-6):
+    def solve(self, t=0.0, steps=1, adaptive=True, min_step=1e-5):
         """Equilibrium under the inputs at time t: mu = 0 -> 1 in load steps starting at 1/steps
         (fixed if not `adaptive`).  The solution is left as x_n (and x_{n+1}) of the problem,
         at rest.  Returns a StaticResult; raises StaticFailure."""
@@ -224,6 +226,10 @@ class Statics:
                     break
                 except NewtonFailure as fail:
                     last = (fail.iterations, fail.residual, fail.reason)
+                    if fail.reason == "DIVERGED_LINEAR_SOLVE":   # singular: smaller steps do not help
+                        self._set(x_cur)
+                        self.set_load(mu, t)
+                        raise StaticFailure(mu, d, fail.residual, fail.iterations, fail.reason) from None
             if solved is None:
                 res.failed += 1
                 dmu = 0.5 * d
