@@ -15,6 +15,8 @@ import pytest
 
 from conftest import BIN, REPO
 
+from rodfem.cli import main
+
 
 def history(path):
     with open(os.path.join(path, "history.csv")) as f:
@@ -36,16 +38,16 @@ def ok(p):
     ("flying-spaghetti-2d", ["dt=0.1"]),
     ("flying-spaghetti-3d", ["dt=0.1"]),     # chord Newton: the lagged Jacobian restarts at checkpoints
 ])
-def test_resumed_run_equals_the_uninterrupted_one(rodfem, tmp_path, scene, args):
+def test_resumed_run_equals_the_uninterrupted_one(tmp_path, scene, args):
     """Run to t = 1 with checkpoints every 5 steps; run to t = 0.7 (its last checkpoint is step 5:
     rows 6, 7 are dropped on resume) and resume it to t = 1: history.csv is the same file."""
     sets = [x for a in args + ["checkpoint_every=5"] for x in ("--set", a)]
     full, part = str(tmp_path / "full"), str(tmp_path / "part")
-    ok(rodfem("run", scene, *sets, "--set", "t_end=1", "--quiet", "--out", full))
-    ok(rodfem("run", scene, *sets, "--set", "t_end=0.7", "--quiet", "--out", part))
+    assert main(["run", scene, *sets, "--set", "t_end=1", "--quiet", "--out", full]) == 0
+    assert main(["run", scene, *sets, "--set", "t_end=0.7", "--quiet", "--out", part]) == 0
     with np.load(os.path.join(part, "checkpoint.npz")) as z:
         assert json.loads(z["meta"].tobytes().decode())["step"] == 5
-    ok(rodfem("run", "--resume", part, "--set", "t_end=1", "--quiet"))
+    assert main(["run", "--resume", part, "--set", "t_end=1", "--quiet"]) == 0
     assert same_file(full, part)
     s = json.loads(open(os.path.join(part, "summary.json")).read())
     assert s["steps"] == 10 and s["status"] == "completed"
@@ -97,23 +99,22 @@ def test_mpi_resume_and_two_ranks_to_one(rodfem, tmp_path):
         assert np.max(np.abs(a[k] - b[k])) <= 1e-12 * scale, k
 
 
-def one_line_error(p, *words):
-    assert p.returncode == 2, (p.returncode, p.stderr)
-    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and all(w in lines[0] for w in words), p.stderr
-
-
-def test_bad_resume_input(rodfem, tmp_path):
+def test_bad_resume_input(capsys, tmp_path):
+    def one_line_error(args, *words):
+        capsys.readouterr()
+        assert main(args) == 2
+        lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+        assert len(lines) == 1 and all(w in lines[0] for w in words), lines
     empty = tmp_path / "empty"
     empty.mkdir()
-    one_line_error(rodfem("run", "--resume", str(empty)), "no checkpoint", "checkpoint_every")
-    one_line_error(rodfem("run", "--resume", str(tmp_path / "missing")), "no checkpoint")
+    one_line_error(["run", "--resume", str(empty)], "no checkpoint", "checkpoint_every")
+    one_line_error(["run", "--resume", str(tmp_path / "missing")], "no checkpoint")
     good = str(tmp_path / "good")
-    ok(rodfem("run", "flying-spaghetti-2d", "--set", "t_end=0.3", "--set", "checkpoint_every=1", "--quiet",
-              "--out", good))
-    one_line_error(rodfem("run", "roll-up-2d", "--resume", good), "scene flying-spaghetti-2d", "not roll-up-2d")
-    one_line_error(rodfem("run", "--resume", good, "--set", "EA=5"), "only t_end")
-    one_line_error(rodfem("run", "flying-spaghetti-2d", "--set", "checkpoint_every=x", "--out", good),
+    assert main(["run", "flying-spaghetti-2d", "--set", "t_end=0.3", "--set", "checkpoint_every=1", "--quiet",
+                 "--out", good]) == 0
+    one_line_error(["run", "roll-up-2d", "--resume", good], "scene flying-spaghetti-2d", "not roll-up-2d")
+    one_line_error(["run", "--resume", good, "--set", "EA=5"], "only t_end")
+    one_line_error(["run", "flying-spaghetti-2d", "--set", "checkpoint_every=x", "--out", good],
                    "'checkpoint_every'")
     # a checkpoint of another rodfem version
     path = os.path.join(good, "checkpoint.npz")
@@ -124,10 +125,10 @@ def test_bad_resume_input(rodfem, tmp_path):
     data["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
     with open(path, "wb") as f:
         np.savez(f, **data)
-    one_line_error(rodfem("run", "--resume", good), "rodfem 0.0.1", "cannot continue")
+    one_line_error(["run", "--resume", good], "rodfem 0.0.1", "cannot continue")
     with open(path, "wb") as f:
         f.write(b"not a checkpoint")
-    one_line_error(rodfem("run", "--resume", good), "unreadable")
+    one_line_error(["run", "--resume", good], "unreadable")
 
 
 if __name__ == "__main__":  # pragma: no cover
