@@ -26,8 +26,13 @@ positions q (pairs q' = v of model.kinematics) are not in H; about a
 pre-stressed state (hanging cable, loaded beam) their columns of A are the
 geometric stiffness, which becomes the Q_qq that makes A = (J - R) Q
 (E^T Q restricted to q is that stiffness, symmetric for conservative loads;
-`checks` reports the residual |A - (J - R) Q|, the asymmetry of E^T Q and
-|R|).  `Hess` is the plain Hessian of H at x* (without geometric stiffness).
+positive about unstressed states and states in tension, indefinite under a
+compressive or bending pre-stress; `checks` reports the residual
+|A - (J - R) Q|, the asymmetry of E^T Q and |R|).  An algebraic row (E = 0:
+a constraint) may be written with either sign; the rows of the models'
+constraints (+G w, the transpose of the reactions +G^T lambda) are negated
+in A and B so that J comes out skew (`checks['rows_negated']`).  `Hess` is
+the plain Hessian of H at x* (without the geometric stiffness).
 
 Modes: the nonzero eigenvalues of the pencil (A, E) are +-i omega.  The rate
 form also has one zero eigenvalue per strain (the compatibility invariants
