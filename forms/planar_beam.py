@@ -45,6 +45,17 @@ def rotation(phi):
     return ufl.as_matrix([[c, -s], [s, c]])
 
 
+def planar_frame(q, position, offset=()):
+    """The point at `offset` X in the section frame: x = r + A(phi) X, and the angle phi (numbers;
+    for joints, rodfem/interconnection.py).  With an offset, x is trigonometric in phi."""
+    phi = q["phi"][0]
+    x = np.asarray(q[position], dtype=float)
+    if len(offset) and any(offset):
+        c, s = np.cos(phi), np.sin(phi)
+        x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+    return Frame(x=x, phi=phi)
+
+
 def cross(a, b):
     """Planar cross product a x b = a^T S^T b = a_0 b_1 - a_1 b_0."""
     return a[0] * b[1] - a[1] * b[0]
@@ -87,15 +98,7 @@ class PlanarBeam:
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
 
-    @staticmethod
-    def frame(q, offset=()):
-        """The point at `offset` X in the section frame: x = r + A(phi) X, angle phi (numbers)."""
-        phi = q["phi"][0]
-        x = np.asarray(q["r"], dtype=float)
-        if len(offset) and any(offset):
-            c, s = np.cos(phi), np.sin(phi)
-            x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
-        return Frame(x=x, phi=phi)
+    frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
 
     def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None):
         if degree < 1:
