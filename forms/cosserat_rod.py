@@ -76,7 +76,8 @@ relaxed) with the complementary energy 1/2 N_k.C_Nk N_k + 1/2 M_k.C_Mk M_k
 the branch's spring strain C_Nk N_k plus its dashpot strain (rate N_k/eta,
 eta = tau_k/C_Nk) is the rod's strain:
 
-    C_Nk (d_t N_k + N_k/tau_k) = R^T d_s v + J_N^T v_d,     C_Mk (d_t M_k + M_k/tau_k) = J_K v_d.
+    C_Nk (d_t N_k + N_k/tau_k) = R^T d_s v + J_N^T v_d,     C_Mk (d_t M_k + M_k/tau_k) = J_K v_d
+    (rows scaled by tau_k/(tau_k + h): viscoelastic.row_scale).
 
 Midpoint rule, tested with (N_k, M_k)_m: H_{n+1} - H_n = -h d_n + h y.u with
 h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (`dissipation`).
@@ -96,7 +97,7 @@ from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
-from forms.viscoelastic import Maxwell, active
+from forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
 RATES = ("w1", "w2", "w3")
@@ -288,9 +289,10 @@ class CosseratRod:
         gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
         F += (ufl.inner(C_N * step.rate("N") - gamma_rate, dN)
               + ufl.inner(C_M * step.rate("M") - curvature_rate(d, w), dM)) * dx
-        for field, C, inv_tau in branches:   # C_k (d_t N_k + N_k/tau_k) = strain rate
+        for field, C, inv_tau in branches:   # C_k (d_t N_k + N_k/tau_k) = strain rate, times tau_k/(tau_k + h)
             rate = gamma_rate if field.startswith("N") else curvature_rate(d, w)
-            F += ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate, test[field]) * dx
+            F += row_scale(step, inv_tau) * ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate,
+                                                      test[field]) * dx
         return F
 
     def dissipation(self, step, dx, ds):

@@ -172,18 +172,21 @@ class PlanarBeam:
              + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
              + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
              + (step.rate("kappa") - w.dx(0)) * dk) * dx
-        for j, (Nj, Mj, R) in enumerate(branches, 1):   # d_t e_j = (kinematic strain rate) - R_j sigma_j
+        for j, ((Nj, Mj, R), b) in enumerate(zip(branches, self.branches), 1):
+            # d_t e_j = (kinematic strain rate) - R_j sigma_j, scaled by tau_j/(tau_j + h)
             G, kap = f"Gamma_{j}", f"kappa_{j}"
             flow = ufl.as_vector([R[0] * Nj[0], R[1] * Nj[1]])
-            F += (ufl.inner(step.rate(G) - A.T * (v.dx(0) - w * S_HAT * r_s) + flow, test[G])
-                  + (step.rate(kap) - w.dx(0) + R[2] * Mj) * test[kap]) * dx
+            F += b.row_scale(step, dx.ufl_domain()) * (
+                ufl.inner(step.rate(G) - A.T * (v.dx(0) - w * S_HAT * r_s) + flow, test[G])
+                + (step.rate(kap) - w.dx(0) + R[2] * Mj) * test[kap]) * dx
         return F
 
     def dissipation(self, step, dx, ds):
         """h d_n = h int sum_j N_j.R_j N_j + R_j M_j^2 ds (None without branches)."""
         if not self.branches:
             return None
-        d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2 for Nj, Mj, R in self._branch_efforts(step, dx.ufl_domain()))
+        d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
+                for Nj, Mj, R in self._branch_efforts(step, dx.ufl_domain()))
         return step.h * d * dx
 
     def compatible_strains(self, x):

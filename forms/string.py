@@ -58,7 +58,7 @@ start unless `initial` says otherwise) with the stored energy W_k(C_k)
 With S_bar_k = 2 grad_bar W_k(C_k,n, C_k,n+1) the v-row carries the total
 stress S_bar + sum_k S_bar_k, and each branch has the row
 
-    int [(C_k,n+1 - C_k,n)/h - 2 d_s r_m . d_s v_m + R_k grad_bar W_k] dC_k = 0,
+    int [(C_k,n+1 - C_k,n)/h - 2 d_s r_m . d_s v_m + R_k grad_bar W_k] dC_k = 0   (times tau_k/(tau_k + h)),
     R_k = 4/(tau_k EA_k)  (so that C_k - 1 relaxes as exp(-t/tau_k) near C_k = 1)
 
 (Paper 4's dashpot  d_t C_el = 2 d_s r . d_s v - (2/etaA) W'(C_el)  with
@@ -165,8 +165,9 @@ class String:
         F = (ufl.inner(step.rate("r") - v, dr)
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC) * dx
-        for k, (Wk, R) in enumerate(branches, 1):   # d_t C_k = 2 d_s r . d_s v - R_k grad_bar W_k
-            F += (step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk) * test[f"C_{k}"] * dx
+        for k, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):
+            # d_t C_k = 2 d_s r . d_s v - R_k grad_bar W_k, scaled by tau_k/(tau_k + h)
+            F += b.row_scale(step, dom) * (step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk) * test[f"C_{k}"] * dx
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
 
