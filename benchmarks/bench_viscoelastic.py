@@ -123,14 +123,23 @@ def held_string(tau, h, steps=10, lam=1.2):
     return branch_history(p, "C_1", h, steps, lambda v: v[0] - 1.0)
 
 
+class Recorder:
+    """A history writer that calls f(problem) at every time level (the state x_n of that level)."""
+
+    def __init__(self, f):
+        self.f = f
+
+    def record(self, row, problem):
+        self.f(problem)
+
+
 def branch_history(p, name, h, steps, value):
+    """value(branch field at the first dof) at t = 0, h, ..., steps h."""
     S = p.space
     dofs = S.collapse(name)[1]
     size = S.field(name).size
-    out = [value(p.x0.x.array[dofs].reshape(-1, size)[0])]
-    for _ in range(steps):
-        run(p, h, h)
-        out.append(value(p.x0.x.array[dofs].reshape(-1, size)[0]))
+    out = []
+    run(p, h, steps * h, writer=Recorder(lambda prob: out.append(value(prob.x0.x.array[dofs].reshape(-1, size)[0]))))
     return np.array(out)
 
 
