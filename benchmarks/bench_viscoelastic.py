@@ -204,7 +204,8 @@ def write(cost_rows, stiff_rows, scene_rows, wall):
                  f"{r['elastic_residual_ms']:.2f} / {r['branch_residual_ms']:.2f} | "
                  f"{r['elastic_jacobian_ms']:.2f} / {r['branch_jacobian_ms']:.2f} | "
                  f"{r['elastic_solve_ms']:.2f} / {r['branch_solve_ms']:.2f} | "
-                 f"{r['elastic_newton_its']:.2f} / {r['branch_newton_its']:.2f} | {r['branch_max_balance_error_rel']:.1e} |")
+                 f"{r['elastic_newton_its']:.2f} / {r['branch_newton_its']:.2f} | "
+                 f"{r['branch_max_balance_error_rel']:.1e} |")
     L += ["", "## Stiff dashpots: the midpoint rule at tau << h", "",
           "A bar held at a strain, its branch starting loaded (relaxation), h = 0.01, 10 steps. "
           "Planar beam (Hooke branch: midpoint = discrete gradient) and the logarithmic string "

@@ -82,7 +82,8 @@ def build(p, comm):
 
 
 scene = Scene("viscoelastic-string",
-              "hanging viscoelastic string (Paper 4): top node pushed along x, then free; H + dissipated - supplied conserved",
+              "hanging viscoelastic string (Paper 4): top node pushed along x, then free; "
+              "H + dissipated - supplied conserved",
               parameters, build,
               notes="H excludes the gravity potential (gravity's work is in 'supplied').")
 

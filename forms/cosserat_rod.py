@@ -299,7 +299,8 @@ class CosseratRod:
         """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (None without branches)."""
         if not self.branches:
             return None
-        terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f)) for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
+        terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
+                 for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
         return step.h * sum(terms[1:], terms[0]) * dx
 
     def compatible_strains(self, x):

@@ -167,7 +167,8 @@ class String:
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC) * dx
         for k, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):
             # d_t C_k = 2 d_s r . d_s v - R_k grad_bar W_k, scaled by tau_k/(tau_k + h)
-            F += b.row_scale(step, dom) * (step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk) * test[f"C_{k}"] * dx
+            row = step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
+            F += b.row_scale(step, dom) * row * test[f"C_{k}"] * dx
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
 

@@ -215,7 +215,8 @@ def test_relaxation_rod_axial_and_bending():
     const = lambda v: (lambda x: np.outer(v, np.ones(x.shape[1])))   # noqa: E731
     branch = cosserat_rod.maxwell(tau, C_N=(1 / EA1,) * 3, C_M=(1 / EI1,) * 3)
     rod = cosserat_rod.CosseratRod(1.0, (0.02, 0.01, 0.01), (1 / EA,) * 3, (1 / EI,) * 3, branches=[branch])
-    stretched = {**straight((0.0, 0.0, 0.0), np.eye(3)), "r": lambda x: np.vstack([(1 + eps0) * x[0], 0 * x[0], 0 * x[0]]),
+    stretched = {**straight((0.0, 0.0, 0.0), np.eye(3)),
+                 "r": lambda x: np.vstack([(1 + eps0) * x[0], 0 * x[0], 0 * x[0]]),
                  "N": const([EA * eps0, 0, 0]), "N_1": const([EA1 * eps0, 0, 0])}
     c, s = (lambda x: np.cos(k0 * x[0])), (lambda x: np.sin(k0 * x[0]))
     bent = {"r": lambda x: np.vstack([s(x) / k0, (1 - c(x)) / k0, 0 * x[0]]),
