@@ -73,9 +73,10 @@ def cmd_run(args):
     from .driver import default_out, run_scene
     out = args.out = args.out or default_out(args.scene)
     result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet)
+    balance = "H_n+1 - H_n + h d_n - h y.u" if result.rows and "dissipated" in result.rows[0] else "H_n+1 - H_n - h y.u"
     say(f"{summary['scene']}: {summary['steps']} steps in {summary['wall_time_s']:.2f} s "
         f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
-        f"max |H_n+1 - H_n - h y.u| = {summary['max_balance_error']:.2e} "
+        f"max |{balance}| = {summary['max_balance_error']:.2e} "
         f"({summary['max_balance_error_relative']:.1e} of max |H|)")
     say(f"results in {out}/: history.csv, summary.json, centreline.pvd (ParaView), shapes.png, energy.png")
 

@@ -1,6 +1,7 @@
 """What a run leaves on disk (rank 0 writes; every file is flushed as it goes):
 
-* history.csv    one row per time level: t, H, supplied, newton_its, balance_error, observables
+* history.csv    one row per time level: t, H, supplied, (dissipated,) newton_its, balance_error, observables
+                 (`dissipated`, the cumulative sum h d_n, only for a dissipating model)
 * summary.json   parameters, versions, elements, dofs, timing, balance errors, status
                  ("running" from the start, replaced at the end by "completed",
                  "newton-failure", "interrupted" or "error")
@@ -279,16 +280,26 @@ def plot_energy(path, result):
     import matplotlib.pyplot as plt
     t, H, W = result.column("t"), result.column("H"), result.column("supplied")
     err = np.abs(result.column("balance_error"))[1:]
-    fig, ax = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    dissipates = "dissipated" in result.rows[0]
+    fig, ax = plt.subplots(3 if dissipates else 2, 1, figsize=(7, 8 if dissipates else 6), sharex=True)
     ax[0].plot(t, H, label="H (Hamiltonian)")
     ax[0].plot(t, W, "--", label="supplied work  sum h y.u")
-    ax[0].plot(t, H - W, ":", label="H - supplied (constant)")
+    if dissipates:   # the dissipated energy also on its own scale (middle panel)
+        D = result.column("dissipated")
+        ax[0].plot(t, D, "-.", label="dissipated  sum h d_n")
+        ax[0].plot(t, H + D - W, ":", label="H + dissipated - supplied (constant)")
+        ax[1].plot(t, D, "-.", color="C2")
+        ax[1].set_ylabel("dissipated  sum h d_n")
+        balance = "|H_{n+1} - H_n + h d_n - h y.u|"
+    else:
+        ax[0].plot(t, H - W, ":", label="H - supplied (constant)")
+        balance = "|H_{n+1} - H_n - h y.u|"
     ax[0].set_ylabel("energy")
     ax[0].legend()
     floor = 1e-17 * max(np.max(np.abs(H)), 1e-300)  # below round-off: drawn at the floor
-    ax[1].semilogy(t[1:], np.maximum(err, floor), ".", ms=3)
-    ax[1].set_ylabel("|H_{n+1} - H_n - h y.u|")
-    ax[1].set_xlabel("t")
+    ax[-1].semilogy(t[1:], np.maximum(err, floor), ".", ms=3)
+    ax[-1].set_ylabel(balance)
+    ax[-1].set_xlabel("t")
     fig.tight_layout()
     replace_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     plt.close(fig)

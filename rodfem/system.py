@@ -247,6 +247,16 @@ class System:
         """h y.u of the last step: the bodies' ports and the driven joints."""
         return self._sum("work") + self.assembler.joint_work
 
+    @property
+    def dissipates(self):
+        """True if a body dissipates (rodfem/model.py: `dissipation`)."""
+        self.build()
+        return any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+
+    def dissipated_energy(self):
+        """h d_n of the last step: the sum over the dissipating bodies."""
+        return self._sum("dissipation")
+
     def observe(self):
         self.build()
         obs = self.assembler.point_observables()

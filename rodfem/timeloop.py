@@ -1,6 +1,10 @@
 """The time loop: x_n -> x_{n+1} by Newton, with the discrete energy balance
 
-    H(x_{n+1}) - H(x_n) = h y.u     (checked every step, recorded in the history)
+    H(x_{n+1}) - H(x_n) = -h d_n + h y.u     (checked every step, recorded in the history)
+
+h d_n >= 0 is the energy dissipated in the step (0 for a conservative model);
+only a dissipating problem (`problem.dissipates`) has the column `dissipated`
+(the sum of h d_n so far).
 
 A problem, as the loop sees it: `t` (the time of its state x_n, advanced by
 the loop), `h` (the step, a fem.Constant), `comm`, `set_time(t)`,
@@ -69,7 +73,9 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
     problem.h.value = dt
     res = result if result is not None else Result()
     H = problem.hamiltonian()
-    row = {"t": t_start, "H": H, "supplied": 0.0, "newton_its": 0, "balance_error": 0.0, **problem.observe()}
+    dissipates = getattr(problem, "dissipates", False)
+    row = {"t": t_start, "H": H, "supplied": 0.0, **({"dissipated": 0.0} if dissipates else {}),
+           "newton_its": 0, "balance_error": 0.0, **problem.observe()}
     res.rows.append(row)
     if writer:
         writer.record(row, problem)
@@ -77,7 +83,7 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
     if progress and problem.comm.rank == 0:
         from tqdm import tqdm
         bar = tqdm(total=n_steps, unit="step", dynamic_ncols=True)
-    supplied = 0.0
+    supplied = dissipated = 0.0
     previous = None  # x_{n-1}, for the Newton start x_{n+1}^0 = 2 x_n - x_{n-1}
     t0 = time.perf_counter()
     try:
@@ -96,8 +102,11 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None):
             H_new = problem.hamiltonian()
             work = problem.supplied_work()
             supplied += work
-            row = {"t": t_next, "H": H_new, "supplied": supplied, "newton_its": solve.iterations,
-                   "balance_error": H_new - H - work, **problem.observe()}
+            lost = problem.dissipated_energy() if dissipates else 0.0
+            dissipated += lost
+            row = {"t": t_next, "H": H_new, "supplied": supplied,
+                   **({"dissipated": dissipated} if dissipates else {}), "newton_its": solve.iterations,
+                   "balance_error": H_new - H + lost - work, **problem.observe()}
             if not np.isfinite(H_new):
                 raise NewtonFailure(n + 1, t_next, float("nan"), solve.iterations, "non-finite energy")
             H = H_new
