@@ -35,11 +35,15 @@
 # convention is not published, the circle is the same.
 #
 # Modes: 'static' (default) -- densities zero, every step an equilibrium
-# (load stepping; the programme's rates vanish at its ends); 'dynamic' --
+# (load stepping); the same pressures along the same path, but with C^2
+# time laws whose second rates vanish where they start (the published sin^2
+# and 1 - cos would leave an alternating O(dt^2) error in load-stepped
+# statics, see demos/_actuated.py); 'dynamic' -- the published time law and
 # the arm's inertia: this soft arm's first bending period is ~1.1 s, so the
 # 0.5 s ramp makes it swing about the circle (no damping in the model).
 # Gravity (-z) is off by default: this arm is too soft to stand upright
-# (its self-weight buckling load q L^3 / EI = 22 > 7.84).
+# (q L^3 / EI = 22 for its weight q per length, above the critical 7.84
+# of a standing column under its own weight).
 #
 # Run it:  rodfem run soft-arm-pneumatic --out results/soft-arm-pneumatic
 #          rodfem run soft-arm-pneumatic --set mode=dynamic --set dt=0.005
@@ -51,8 +55,8 @@ from rodfem import Load, Problem, Support
 from rodfem.cli import main
 from rodfem.scene import Parameter, Scene, common, density, stiffness
 
-from demos._actuated import CHAMBER_ANGLES, chamber_pressures, circle_programme, soft_arm_parameters, \
-    soft_arm_section, soft_arm_stiffness, soft_rod
+from demos._actuated import CHAMBER_ANGLES, chamber_pressures, soft_arm_parameters, soft_arm_section, \
+    soft_arm_stiffness, soft_rod
 from demos._rod3d import NEWTON, smooth_ramp, straight
 from forms import actuators
 
@@ -71,7 +75,8 @@ parameters = common(n_elements=8, dt=0.02, t_end=4.0) + soft_arm_parameters() + 
 
 def chambers(p):
     _, _, Ac = soft_arm_section(p)
-    pressures = chamber_pressures(p["amplitude"], CHAMBER_ANGLES, p["t_ramp"], p["t_circle"])
+    pressures = chamber_pressures(p["amplitude"], CHAMBER_ANGLES, p["t_ramp"], p["t_circle"],
+                                  smooth=p["mode"] == "static")
     return [actuators.Chamber(pi, actuators.on_circle(p["chamber_offset"], th), radius=p["R_out"], area=Ac,
                               name=f"chamber{i + 1}")
             for i, (pi, th) in enumerate(zip(pressures, CHAMBER_ANGLES))]
@@ -93,7 +98,8 @@ def quasi_static_tip(p, t):
     """The exact quasi-static tip at time t (no gravity): the circular arc of the chambers' pressures."""
     K_se, K_bt, _, _ = soft_arm_stiffness(p)
     _, _, Ac = soft_arm_section(p)
-    pressures = chamber_pressures(p["amplitude"], CHAMBER_ANGLES, p["t_ramp"], p["t_circle"])
+    pressures = chamber_pressures(p["amplitude"], CHAMBER_ANGLES, p["t_ramp"], p["t_circle"],
+                                  smooth=p["mode"] == "static")
     ch = [(pi(t), Ac, actuators.on_circle(p["chamber_offset"], th)) for pi, th in zip(pressures, CHAMBER_ANGLES)]
     Gamma, K = actuators.uniform_equilibrium(K_se, K_bt, chambers=ch)
     R0 = np.column_stack(DIRECTORS)
@@ -102,7 +108,6 @@ def quasi_static_tip(p, t):
 
 def circle(p):
     """(radius, height) of the quasi-static tip circle (full amplitude, no gravity)."""
-    a, _ = circle_programme(p["amplitude"], p["t_ramp"], p["t_circle"])
     tip = quasi_static_tip(p, p["t_ramp"])
     return float(np.hypot(tip[0], tip[1])), float(tip[2])
 

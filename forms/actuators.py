@@ -235,8 +235,8 @@ class _Actuator:
             if not (0 <= s0 < s1):
                 raise ParameterError(f"{self.name}: segment must be (s0, s1) with 0 <= s0 < s1 (got {self.segment!r})")
             self.segment = (s0, s1)
-        if self.segment is not None:
-            self._check_offset(*self.segment)      # (the whole rod: at bind, when L is known)
+        # the offset over the segment now (over the whole rod at bind, when L is known; at s = 0 now)
+        self._check_offset(*(self.segment or (0.0, 0.0)))
         self._check_input(self.history(0.0), 0.0)
 
     def _check_offset(self, s0, s1):
