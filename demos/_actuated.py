@@ -1,9 +1,8 @@
 # Shared pieces of the actuated-arm demos (forms/actuators.py): the soft
 # silicone arm with three pneumatic chambers (its section, material and
-# parameters), the pressure programme of Paper 1's example 04, smooth
-# switching functions for input histories, and a helper that keeps only the
-# actuators a run uses (an actuator whose input is zero for all t is not
-# assembled at all).
+# parameters), the pressure programme of Paper 1's example 04, and smooth
+# switching functions for input histories.  (The scenes assemble only the
+# actuators whose input is not zero.)
 import numpy as np
 
 from rodfem.scene import Parameter, ParameterError, density, stiffness
@@ -124,7 +123,3 @@ def chamber_pressures(amplitude, angles=CHAMBER_ANGLES, t_ramp=0.5, t_circle=3.0
     a, phi = circle_programme(amplitude, t_ramp, t_circle, smooth)
     return [lambda t, th=th: 0.5 * a(t) * (1 + np.cos(phi(t) - th)) for th in angles]
 
-
-def used(actuators, values):
-    """The actuators whose input value (a number) is not zero: the others are not assembled."""
-    return [a for a, v in zip(actuators, values) if v != 0]

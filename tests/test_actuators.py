@@ -36,11 +36,6 @@ def tip(row):
     return np.array([row[f"tip_{c}"] for c in "xyz"])
 
 
-def nodal_positions(P):
-    """(s, r(s)) at the owned P2 nodes."""
-    return P.space.nodal(P.x0, "r")
-
-
 def gathered(P, name):
     s, v = P.space.nodal(P.x0, name)
     s_all = np.concatenate(COMM.allgather(s))
@@ -219,17 +214,15 @@ def test_planar_beam_ports_balance():
     res = run(P, dt, 1.0)
     H = res.column("H")
     assert np.max(np.abs(res.column("balance_error"))) <= 1e-12 * np.max(np.abs(H))
+    # the actuators' work alone: a run without gravity
     tm = res.column("t")[1:] - dt / 2
-    W_ports = (-np.array([tension(t) for t in tm]) * np.diff(res.column("length_t"))
-               + np.array([pressure(t) for t in tm]) * np.diff(res.column("volume_c")))
-    # gravity's work is the rest: check the actuators through a run without gravity
     P2 = Problem(beam, 1.0, 8, loads=loads[:2], supports=[Support("left", "clamped")],
                  initial={"r": lambda x: np.vstack([x[0], 0 * x[0]])})
     res2 = run(P2, dt, 1.0)
     W2 = (-np.array([tension(t) for t in tm]) * np.diff(res2.column("length_t"))
           + np.array([pressure(t) for t in tm]) * np.diff(res2.column("volume_c")))
     assert np.max(np.abs(np.diff(res2.column("supplied")) - W2)) <= 1e-12 * np.max(np.abs(res2.column("H")))
-    assert np.ptp(res2.column("tip_y")) > 0.05 and np.all(np.isfinite(W_ports))
+    assert np.ptp(res2.column("tip_y")) > 0.05
 
 
 def test_zero_inputs_change_nothing_bit_for_bit():
