@@ -28,7 +28,7 @@
 # 2 mm at 5 mm from the axis, |a| = 50 kPa.  Published circle: radius 0.092-
 # 0.093 at height 0.1466-0.1477 (4.4 % elongation, 64 degrees of bending);
 # with these choices the quasi-static circle has radius 0.0841 at height
-# 0.1530 (3.8 %, 60 degrees).  Sign: Paper 1's a = -50 elongates the arm,
+# 0.1530 (3.8 %, 58 degrees).  Sign: Paper 1's a = -50 elongates the arm,
 # so its p is minus the gauge pressure; here a > 0 is the gauge pressure.
 # The published tip leads the angle phi, ours trails it by 180 degrees (an
 # inflated chamber bends the arm away from itself); Paper 1's offset
