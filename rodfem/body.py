@@ -137,6 +137,9 @@ class Body:
                 obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             obs.update(self.momentum_forms(X))
+        for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
+            if hasattr(load, "observables"):
+                obs.update(load.observables(X, self.dx, self.ds))
         return obs
 
     def momentum_forms(self, X):
