@@ -68,6 +68,24 @@ the scheme is invariant under superposed rotations and the total angular
 momentum L = int rhoA phi x v + sum_i m_i d_i x w_i ds is conserved when no
 load acts.
 
+Viscoelasticity (generalized Maxwell in compliance form, forms/viscoelastic.py):
+`branches` = [maxwell(tau_k, C_N=..., C_M=...), ...] adds per branch k its
+stress resultants N_k and/or M_k (fields "N_k", "M_k", DG1, starting at 0:
+relaxed) with the complementary energy 1/2 N_k.C_Nk N_k + 1/2 M_k.C_Mk M_k
+(branch compliances > 0).  The momentum rows see N + sum N_k, M + sum M_k;
+the branch's spring strain C_Nk N_k plus its dashpot strain (rate N_k/eta,
+eta = tau_k/C_Nk) is the rod's strain:
+
+    C_Nk (d_t N_k + N_k/tau_k) = R^T d_s v + J_N^T v_d,     C_Mk (d_t M_k + M_k/tau_k) = J_K v_d
+    (rows scaled by tau_k/(tau_k + h): viscoelastic.row_scale).
+
+Midpoint rule, tested with (N_k, M_k)_m: H_{n+1} - H_n = -h d_n + h y.u with
+h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (`dissipation`).
+The equilibrium branch may keep zero compliances (a constraint with its
+multiplier): the branch rows do not care.  A branch on N is pointless for an
+inextensible, shear-rigid rod (its strain rate is zero, N_k stays 0): give
+it C_M only.
+
 Ports: a spatial moment m acts on the directors through
 <m, 1/2 sum_i d_i x w_i> (= m . omega, see `spatial_moment`); a body-fixed
 moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
@@ -78,6 +96,8 @@ import ufl
 from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
+
+from forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
 RATES = ("w1", "w2", "w3")
@@ -163,6 +183,23 @@ def compliances(EA, GA2, GA3, GJ, EI2, EI3):
     return tuple(inv[:3]), tuple(inv[3:])
 
 
+def maxwell(tau, C_N=None, C_M=None):
+    """A Maxwell branch on the stress resultants: springs with compliances C_N = (C_N1, C_N2, C_N3)
+    and/or C_M = (C_M1, C_M2, C_M3) (entries > 0; None: the branch does not act on N, resp. M)
+    in series with dashpots of relaxation time tau."""
+    parts = {}
+    for name, c in (("N", C_N), ("M", C_M)):
+        if c is None:
+            continue
+        c = np.asarray(c, dtype=float)
+        if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c <= 0):
+            raise ValueError(f"Maxwell branch: C_{name} must be three compliances > 0 (got {c!r}); "
+                             f"leave it out (None) for no branch on {name}")
+        parts[name] = c
+    stiffness = [1.0 / c for name in ("N", "M") if name in parts for c in parts[name]]
+    return Maxwell(tau, parts, stiffness, name="maxwell")
+
+
 class CosseratRod:
     """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
     about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0).
@@ -174,8 +211,10 @@ class CosseratRod:
     flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
 
-    def __init__(self, rhoA, rhoJ, C_N, C_M):
+    def __init__(self, rhoA, rhoJ, C_N, C_M, branches=()):
         self.rhoA = float(rhoA)
+        if not self.rhoA >= 0:  # also NaN
+            raise ValueError(f"CosseratRod: rhoA must be a number >= 0 (got {rhoA!r})")
         self.masses = director_masses(rhoJ)
         self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))
         if self.C_N.shape != (3,) or self.C_M.shape != (3,) or np.any(self.C_N < 0) or np.any(self.C_M < 0):
@@ -187,6 +226,15 @@ class CosseratRod:
         v3 = (3,)
         self.fields = ([Field(n, "P", 2, v3) for n in ("r", *DIRECTORS, "v", *RATES)]
                        + [Field("N", "DG", 1, v3), Field("M", "DG", 1, v3), Field("lam", "P", 2, (6,))])
+        # Maxwell branches: their stress resultants are internal variables, their
+        # compliances and 1/tau run-time constants
+        self.branches = active(branches)
+        self.branch_parameters = []
+        for k, b in enumerate(self.branches, 1):
+            self.fields += [Field(f"{name}_{k}", "DG", 1, v3) for name in ("N", "M") if name in b.spring]
+            inv_tau = 0.0 if np.isinf(b.tau) else 1.0 / b.tau
+            self.branch_parameters.append(ParameterSet(inv_tau=inv_tau, **{
+                f"C_{name}{i + 1}": c for name, cs in b.spring.items() for i, c in enumerate(cs)}))
 
     def _constants(self, domain):
         """(rhoA, director masses m_1..3, C_N, C_M) as UFL constants on `domain`."""
@@ -201,7 +249,20 @@ class CosseratRod:
         kin = 0.5 * rhoA * ufl.inner(x["v"], x["v"])
         kin += sum(0.5 * m * ufl.inner(x[n], x[n]) for m, n in zip(masses, RATES))
         pot = 0.5 * ufl.inner(x["N"], C_N * x["N"]) + 0.5 * ufl.inner(x["M"], C_M * x["M"])
+        for field, C, _ in self._branch_terms(dx.ufl_domain()):
+            pot = pot + 0.5 * ufl.inner(x[field], C * x[field])
         return (kin + pot) * dx
+
+    def _branch_terms(self, domain):
+        """[(field 'N_k' or 'M_k', its compliance matrix, 1/tau_k)] of the Maxwell branches."""
+        out = []
+        for k, (b, params) in enumerate(zip(self.branches, self.branch_parameters), 1):
+            c = params.on(domain)
+            for name in ("N", "M"):
+                if name in b.spring:
+                    C = ufl.as_matrix([[c[f"C_{name}{i + 1}"] if i == j else 0.0 for j in range(3)] for i in range(3)])
+                    out.append((f"{name}_{k}", C, c["inv_tau"]))
+        return out
 
     def residual(self, step, test, dx, ds):
         """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, w_m, N_m, M_m, lambda_{n+1})."""
@@ -211,6 +272,12 @@ class CosseratRod:
         d = [step.mid(n) for n in DIRECTORS]
         w = [step.mid(n) for n in RATES]
         N, M, lam = step.mid("N"), step.mid("M"), step.x1["lam"]
+        branches = self._branch_terms(dx.ufl_domain())
+        for field, _, _ in branches:   # parallel branches: the resultants add
+            if field.startswith("N"):
+                N = N + step.mid(field)
+            else:
+                M = M + step.mid(field)
         dv, dN, dM, dlam = test["v"], test["N"], test["M"], test["lam"]
         dw = [test[n] for n in RATES]
         # kinematics d_t q = v (nodal: lumped on the GLL rule)
@@ -229,7 +296,19 @@ class CosseratRod:
         gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
         F += (ufl.inner(C_N * step.rate("N") - gamma_rate, dN)
               + ufl.inner(C_M * step.rate("M") - curvature_rate(d, w), dM)) * dx
+        for field, C, inv_tau in branches:   # C_k (d_t N_k + N_k/tau_k) = strain rate, times tau_k/(tau_k + h)
+            rate = gamma_rate if field.startswith("N") else curvature_rate(d, w)
+            F += row_scale(step, inv_tau) * ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate,
+                                                      test[field]) * dx
         return F
+
+    def dissipation(self, step, dx, ds):
+        """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (None without branches)."""
+        if not self.branches:
+            return None
+        terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
+                 for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
+        return step.h * sum(terms[1:], terms[0]) * dx
 
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""

@@ -31,6 +31,7 @@ from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
 from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
+from forms.planar_beam import planar_frame
 
 
 class PointMass:
@@ -131,14 +132,7 @@ class PlanarRigidBody:
         p = c["m"] * x["v"]
         return {"p_x": p[0], "p_y": p[1], "L_z": x["x"][0] * p[1] - x["x"][1] * p[0] + c["J"] * x["omega"]}
 
-    @staticmethod
-    def frame(q, offset=()):
-        phi = q["phi"][0]
-        x = np.asarray(q["x"], dtype=float)
-        if len(offset) and any(offset):
-            c, s = np.cos(phi), np.sin(phi)
-            x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
-        return Frame(x=x, phi=phi)
+    frame = staticmethod(lambda q, offset=(): planar_frame(q, "x", offset))
 
     @staticmethod
     def initial(x, phi=0.0, v=(0.0, 0.0), omega=0.0):

@@ -1,8 +1,13 @@
 """rodfem: port-Hamiltonian rods, beams, strings and multibody systems in FEniCSx."""
-import logging
+from .stdio import ensure_standard_streams
 
-from .integrators import RULES, Step  # noqa: F401
-from .interconnection import GROUND, ConstraintError, ground  # noqa: F401
+ensure_standard_streams()  # before anything (UFL, PETSc, MPI) touches a closed stdout
+
+import logging  # noqa: E402
+
+from .errors import InputError, Interrupted  # noqa: F401,E402
+from .integrators import RULES, Step  # noqa: F401,E402
+from .interconnection import GROUND, ConstraintError, ground  # noqa: F401,E402
 from .newton import NewtonFailure  # noqa: F401
 from .ports import Load, Support, constant_in_time, ramp  # noqa: F401
 from .problem import Problem  # noqa: F401

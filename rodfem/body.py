@@ -17,8 +17,10 @@ from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
 from .integrators import Step
+from .jitcache import compiles
+from .limits import check_elements
 from .ports import ENDS
-from .spaces import StateSpace
+from .spaces import StateSpace, dofs_per_element
 
 
 class Body:
@@ -26,8 +28,10 @@ class Body:
 
     initial: dict field -> callable x -> values (x[0] = s) or UFL expression;
              strains not given are set from model.compatible_strains.
+    n_elements (a flexible body): a whole number, at least the number of MPI ranks, small enough to fit in memory.
     """
 
+    @compiles  # the elements and the initial values' expressions: under the JIT cache lock
     def __init__(self, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None,
                  integrator="midpoint", comm=MPI.COMM_WORLD, name=""):
         self.model, self.name = model, name
@@ -37,7 +41,8 @@ class Body:
             if supports:
                 raise ValueError(f"body {name or model}: a rigid body has no ends to support; "
                                  "fix it with a joint to GROUND")
-        self.length, self.n_elements = float(length), int(n_elements)
+        self.length = float(length)
+        self.n_elements = 1 if self.rigid else check_elements(n_elements, dofs_per_element(model.fields), comm)
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
         self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
         self.comm = self.mesh.comm
@@ -65,13 +70,23 @@ class Body:
 
     def forms(self, prefix=""):
         """dict of the UFL forms a run needs: F, J = dF/dx_{n+1}, H(x_{n+1}), the supplied work h y.u
-        (None without loads) and the observables ('obs:' + column name)."""
+        (None without loads), the observables ('obs:' + column name) and, only for a
+        dissipating model, 'dissipation' = h d_n (rodfem/model.py)."""
         F = self.residual_form()
         powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
         X1 = self.space.split(self.x1)
-        return {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
-                "work": self.h * sum(powers[1:], powers[0]) if powers else None,
-                **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
+        forms = {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
+                 "work": self.h * sum(powers[1:], powers[0]) if powers else None,
+                 **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
+        dissipation = self.dissipation_form()
+        if dissipation is not None:   # only a dissipating model has (and compiles) this form
+            forms["dissipation"] = dissipation
+        return forms
+
+    def dissipation_form(self):
+        """h d_n, the energy the step dissipates (UFL), or None: the model's optional `dissipation`."""
+        dissipation = getattr(self.model, "dissipation", None)
+        return dissipation(self.step, self.dx, self.ds) if dissipation is not None else None
 
     # -- set-up -------------------------------------------------------------
     def _tag_ends(self):
@@ -122,6 +137,9 @@ class Body:
                 obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             obs.update(self.momentum_forms(X))
+        for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
+            if hasattr(load, "observables"):
+                obs.update(load.observables(X, self.dx, self.ds))
         return obs
 
     def momentum_forms(self, X):

@@ -178,31 +178,33 @@ class Saver:
     """`after_step` of the time loop: the checkpoint after every `every`-th step (only there: a
     resumed run restarts Newton where the uninterrupted one did)."""
 
-    def __init__(self, out, scene_name, params, problem, every, n_steps):
-        self.out, self.scene, self.params, self.problem = out, scene_name, params, problem
+    def __init__(self, outdir, scene_name, params, problem, every, n_steps):
+        self.outdir, self.out = outdir, outdir.path
+        self.scene, self.params, self.problem = scene_name, params, problem
         self.every, self.n_steps = int(every), n_steps
         self.layout = _Layout(problem)
         self.comm = problem.comm
         if self.comm.size > 1:
             deterministic_solver(problem)
 
-    def __call__(self, n, previous, H, supplied):
+    def __call__(self, n, previous, H, supplied, dissipated=0.0):
         if n % self.every:
             return
-        save(self.out, self.problem, self.layout, n, previous, H, supplied,
-             {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every})
+        save(self.outdir, self.problem, self.layout, n, previous, H, supplied,
+             {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every},
+             dissipated=dissipated)
         fresh_newton(self.problem)
-        if self.comm.rank == 0 and n != self.n_steps:   # how far it got, if it is killed now
+        if n != self.n_steps:   # how far it got, if it is killed now
+            from .output import write_json
             status = {"scene": self.scene, "status": "running", "steps": n, "t": n * float(self.problem.h.value),
                       "n_steps": self.n_steps, "checkpoint": {"step": n, "file": NAME},
-                      "resume": f"rodfem run --resume {self.out}", "parameters": self.params}
-            path = os.path.join(self.out, "summary.json")
-            with open(path + ".tmp", "w") as f:
-                json.dump(status, f, indent=2, default=float)
-            os.replace(path + ".tmp", path)
+                      "resume": f"rodfem run --resume {self.out}", "parameters": self.params,
+                      "mpi_ranks": self.comm.size, "pid": os.getpid()}
+            self.outdir.do("write summary.json", write_json, self.outdir.file("summary.json"), status)
 
 
-def save(out, problem, layout, n, previous, H, supplied, meta):
+def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
+    """Write the checkpoint of step n into `out` (an OutDir or a directory path; collective)."""
     from . import __version__
     comm = problem.comm
     dt = float(problem.h.value)
@@ -212,11 +214,17 @@ def save(out, problem, layout, n, previous, H, supplied, meta):
         parrays, plam = layout.split(previous)
         data["previous"] = _pack(problem, parrays, comm)
         data["previous_lam"] = _gather_lam(comm, plam)
-    if comm.rank != 0:
-        return
     info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=n * dt, dt=dt, H=H, supplied=supplied,
+                dissipated=dissipated,
                 has_previous=previous is not None, mpi_ranks=comm.size,
                 linear_solver=problem.newton.settings.get("pc_factor_mat_solver_type"))
+    if hasattr(out, "do"):
+        out.do("write the checkpoint", _write, out.path, info, data)
+    elif comm.rank == 0:
+        _write(out, info, data)
+
+
+def _write(out, info, data):
     flat = {"meta": np.frombuffer(json.dumps(info, default=float).encode(), dtype=np.uint8)}
     for which in ("x", "previous"):
         if which in data:
@@ -335,8 +343,9 @@ def restore(problem, meta, arrays):
         problem.newton.settings["pc_factor_mat_solver_type"] = solver
         fresh_newton(problem)
     comm.Barrier()
+    problem.t = float(meta["t"])
     return SimpleNamespace(step=int(meta["step"]), H=float(meta["H"]), supplied=float(meta["supplied"]),
-                           previous=previous, t=float(meta["t"]))
+                           dissipated=float(meta.get("dissipated", 0.0)), previous=previous, t=float(meta["t"]))
 
 
 def resume_parameters(meta, directory, overrides):
@@ -350,8 +359,22 @@ def resume_parameters(meta, directory, overrides):
 
 # -- the output directory of a resumed run ------------------------------------------------------------
 
-def truncate_history(out, step):
-    """Keep the header and the rows of steps 0..step of out/history.csv; returns them (dicts)."""
+def truncate_history(outdir, step):
+    """Keep the header and the rows of steps 0..step of history.csv in the OutDir (collective);
+    returns them (dicts) on rank 0, [] elsewhere."""
+    rows, error = [], None
+    if outdir.comm.rank == 0:
+        try:
+            rows = _truncate(outdir.path, step)
+        except ParameterError as e:
+            error = str(e)
+    error = outdir.comm.bcast(error, root=0)
+    if error:
+        raise ParameterError(error)
+    return rows
+
+
+def _truncate(out, step):
     path = os.path.join(out, "history.csv")
     if not os.path.isfile(path):
         raise ParameterError(f"{out} has a checkpoint but no history.csv: cannot continue it")
@@ -369,22 +392,22 @@ def truncate_history(out, step):
     return [{k: (int(float(v)) if k == "newton_its" else float(v)) for k, v in r.items()} for r in rows]
 
 
-def writer_for(out, problem, n_steps, frames, step, t):
+def writer_for(outdir, problem, n_steps, frames, step, t):
     """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint."""
     from .output import RunWriter, bodies_of
 
     class ResumedWriter(RunWriter):
         def __init__(self):
-            super().__init__(out, problem, n_steps, frames)
+            super().__init__(outdir, problem, n_steps, frames)
             self.count = step + 1
-            if not self.root:
+            if problem.comm.rank != 0:
                 return
-            path = os.path.join(out, "history.csv")
+            path = outdir.file("history.csv")
             with open(path, newline="") as f:
                 header = next(csv.reader(f))
             self._file = open(path, "a", newline="")
             self._csv = csv.DictWriter(self._file, fieldnames=header)
-            pvd = os.path.join(out, "centreline.pvd")
+            pvd = outdir.file("centreline.pvd")
             if os.path.isfile(pvd):
                 import meshio
                 dims = [b.space.field(b.model.position).size for _, b in bodies_of(problem)]
@@ -394,7 +417,7 @@ def writer_for(out, problem, n_steps, frames, step, t):
                         name = ds.get("file")
                         self.frames.append((tf, name))
                         try:
-                            mesh = meshio.read(os.path.join(out, name))
+                            mesh = meshio.read(outdir.file(name))
                             body = np.asarray(mesh.point_data["body"]).astype(int)
                             self.snapshots.append((tf, [mesh.points[body == k][:, :d] for k, d in enumerate(dims)]))
                         except Exception:  # noqa: BLE001  (a frame that cannot be read is left out of shapes.png)

@@ -1,15 +1,23 @@
 """Command line: ``rodfem list | show SCENE | run SCENE [--set NAME=VALUE ...] --out DIR``.
 
-Bad input ends with one line naming the parameter and what is allowed
-(exit code 2); a Newton failure with one line giving step, time and
-residual (exit code 3), keeping what was written.
+Every way a run can end is one line on stderr and an exit code
+(rodfem.errors): bad input or environment ``rodfem: error: ...`` naming the
+parameter or path and what is allowed (2); a Newton failure with step, time
+and residual (3), keeping what was written; SIGINT/SIGTERM finish the
+current step, write the results and exit with 130/143
+(rodfem.interrupts).  Under MPI only rank 0 prints, and the ranks agree on
+an error before raising it; anything unforeseen aborts every rank
+(MPI_Abort) rather than leave one waiting.
 """
 import argparse
 import os
 import sys
+import traceback
 
 from mpi4py import MPI
 
+from . import interrupts
+from .errors import InputError, Interrupted
 from .newton import NewtonFailure
 from .scene import ParameterError, load, scenes
 
@@ -17,8 +25,23 @@ comm = MPI.COMM_WORLD
 
 
 def say(*args, file=None):
-    if comm.rank == 0:
-        print(*args, file=file or sys.stdout, flush=True)
+    """Print on rank 0.  A standard output that cannot be written (``> /dev/full``) is an InputError."""
+    if comm.rank != 0:
+        return
+    stream = file or sys.stdout
+    try:
+        print(*args, file=stream, flush=True)
+    except OSError as e:
+        silence(stream)
+        if stream is sys.stdout:
+            raise InputError(f"cannot write to standard output ({e.strerror})") from None
+
+
+def silence(stream):
+    """Point a stream that failed at /dev/null, so that its unwritten rest does not fail again at exit."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, stream.fileno())
+    os.close(null)
 
 
 def parse_sets(pairs):
@@ -50,12 +73,13 @@ def cmd_run(args):
     from .driver import default_out, run_scene
     if args.scene is None and not args.resume:
         raise ParameterError("run needs a SCENE (or --resume DIR)")
-    out = args.out or args.resume or default_out(args.scene)
+    out = args.out = args.out or args.resume or default_out(args.scene)
     result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet,
                                 resume=args.resume)
+    balance = "H_n+1 - H_n + h d_n - h y.u" if result.rows and "dissipated" in result.rows[0] else "H_n+1 - H_n - h y.u"
     say(f"{summary['scene']}: {summary['steps']} steps in {summary['wall_time_s']:.2f} s "
         f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
-        f"max |H_n+1 - H_n - h y.u| = {summary['max_balance_error']:.2e} "
+        f"max |{balance}| = {summary['max_balance_error']:.2e} "
         f"({summary['max_balance_error_relative']:.1e} of max |H|)")
     say(f"results in {out}/: history.csv, summary.json, centreline.pvd (ParaView), shapes.png, energy.png")
 
@@ -166,14 +190,32 @@ def main(argv=None):
     import logging
     logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
-        args.func(args)
-    except ParameterError as e:
-        say(f"rodfem: error: {e}", file=sys.stderr)
-        return 2
+        with interrupts.deferred():
+            args.func(args)
+    except InputError as e:
+        return fail(f"rodfem: error: {e}", e.exit_code)
     except NewtonFailure as e:
-        say(f"rodfem: {e}; results so far kept", file=sys.stderr)
-        return 3
+        return fail(f"rodfem: error: {e}{kept(args)}", 3)
+    except Interrupted as e:
+        return fail(f"rodfem: {e}{kept(args)}", e.exit_code)
+    except Exception:
+        if comm.size > 1:  # a bug: abort every rank rather than leave the others waiting
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
+        raise
     return 0
+
+
+def kept(args):
+    out = getattr(args, "out", None)
+    return f"; results so far kept in {out}/" if out and args.command == "run" else ""
+
+
+def fail(message, code):
+    """Report on one line (rank 0) and return the exit code."""
+    say(" ".join(message.split()), file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -107,3 +107,17 @@ def block_local_to_global(comm, maps):
 def PETSc_int():
     from petsc4py import PETSc
     return PETSc.IntType
+
+
+def form_comm(ufl_form):
+    """The communicator of the mesh a UFL form is defined on."""
+    return ufl_form.ufl_domain().ufl_cargo().comm
+
+
+def jit_cache_dir():
+    """The directory DOLFINx's JIT compiles into ($XDG_CACHE_HOME/fenics, default ~/.cache/fenics)."""
+    from pathlib import Path
+
+    from dolfinx import jit
+    options = jit.get_options() if hasattr(jit, "get_options") else jit.get_parameters()
+    return Path(options["cache_dir"])

@@ -20,5 +20,15 @@ A model is any object with
 ``momentum(x)``  dict column -> density of momentum maps (p_x, ..., L_z),
                  written for unsupported bodies; may be empty
 ``flows``        dict load-kind -> flow field, e.g. {"force": "v", "moment": "omega"}
+
+Optional, for a model with dissipation (E x' = (J - R) z + B u, R >= 0):
+
+``dissipation(step, dx, ds)``
+                 the energy h d_n >= 0 the step dissipates, as a UFL form (h = step.h),
+                 such that H(x_{n+1}) - H(x_n) = -h d_n + h y.u holds exactly for the
+                 step's residual (e.g. h int z.R z ds with z the residual's efforts of
+                 the dissipative rows); None (or no such method) when the model
+                 dissipates nothing: then nothing is built or assembled for it
+                 (forms/viscoelastic.py: generalized Maxwell branches)
 """
 from .spaces import Field  # noqa: F401

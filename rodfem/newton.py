@@ -11,6 +11,8 @@ parallel) and repeats the step (`Newton.linear_solver` tells which one ran).
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``).
 """
+import os
+import re
 import time
 from dataclasses import dataclass
 
@@ -18,6 +20,7 @@ from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
 from . import compat
+from .errors import InputError
 
 # Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
 # round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
@@ -43,6 +46,16 @@ class Solve:
 
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+
+def petsc_error(error, what):
+    """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
+    what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""
+    lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
+    reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
+    options = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
+    return InputError(f"{what}{options}: {reason}; rodfem's solver options have the prefix -rodfem_, "
+                      f"e.g. -rodfem_snes_max_it 50")
 
 
 class FormAssembler:
@@ -124,10 +137,14 @@ class Newton:
             if not opts.hasName(self.prefix + key):
                 opts[self.prefix + key] = value
                 ours.append(self.prefix + key)
-        self.snes.setFromOptions()
-        self.snes.getKSP().setFromOptions()
-        for name in ours:
-            opts.delValue(name)
+        try:
+            self.snes.setFromOptions()
+            self.snes.getKSP().setFromOptions()
+        except PETSc.Error as e:
+            raise petsc_error(e, "PETSc refused an option") from None
+        finally:
+            for name in ours:
+                opts.delValue(name)
 
     @property
     def linear_solver(self):
@@ -144,7 +161,10 @@ class Newton:
 
     def _solve(self, step, t):
         self._start.copy(self._work)
-        self.snes.solve(None, self._work)
+        try:
+            self.snes.solve(None, self._work)
+        except PETSc.Error as e:  # not a divergence (that is a converged reason), but PETSc giving up
+            raise petsc_error(e, f"PETSc stopped at step {step} (t = {t:.6g})") from None
         reason = self.snes.getConvergedReason()
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE and self.linear_solver == "petsc":
             self.settings["pc_factor_mat_solver_type"] = "superlu" if self.snes.comm.size == 1 else "mumps"
@@ -154,6 +174,8 @@ class Newton:
             return self._solve(step, t)
         its = self.snes.getIterationNumber()
         res = self.snes.getFunctionNorm()
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN:
+            res = float("nan")  # PETSc leaves the last finite norm (0 at the first iteration)
         if reason <= 0 or res != res:
             if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
                 return self._solve_full_newton(step, t)

@@ -8,6 +8,7 @@ from mpi4py import MPI
 
 from . import compat
 from .body import Body
+from .jitcache import locked
 from .newton import Newton
 
 
@@ -22,7 +23,9 @@ def compile_forms(forms):
     for f in forms.values():
         if f is not None:
             f.signature()  # computed (and kept by UFL) before any compilation
-    return {k: compat.form(f) if f is not None else None for k, f in forms.items()}
+    comm = compat.form_comm(next(f for f in forms.values() if f is not None))
+    with locked(comm):  # rodfem/jitcache.py
+        return {k: compat.form(f) if f is not None else None for k, f in forms.items()}
 
 
 class Problem(Body):
@@ -30,13 +33,16 @@ class Problem(Body):
 
     initial: dict field -> callable x -> values (x[0] = s) or UFL expression;
              strains not given are set from model.compatible_strains.
+    `t` is the time of the state x_n (0 at the start; the time loop advances it).
     """
 
     def __init__(self, model, length, n_elements, loads=(), supports=(), initial=None,
                  integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None):
         super().__init__(model, length, n_elements, loads, supports, initial, integrator, comm)
+        self.t = 0.0
         compiled = compile_forms(self.forms())
         self.F, self.J, self.H, self.work = (compiled[k] for k in ("F", "J", "H", "work"))
+        self.D = compiled.get("dissipation")   # h d_n; None: the model dissipates nothing
         self.observables_compiled = {k[4:]: f for k, f in compiled.items() if k.startswith("obs:")}
         self.newton = Newton(self.F, self.J, self.x1, self.bcs, options=newton_options)
 
@@ -65,6 +71,15 @@ class Problem(Body):
     def supplied_work(self):
         """h y.u of the last step, with u at t_{n+1/2} and y = flow_{n+1/2}."""
         return self.assemble(self.work) if self.work is not None else 0.0
+
+    @property
+    def dissipates(self):
+        """True if the model dissipates (the history then has the column 'dissipated')."""
+        return self.D is not None
+
+    def dissipated_energy(self):
+        """h d_n >= 0 of the last step (0 without dissipation)."""
+        return self.assemble(self.D) if self.D is not None else 0.0
 
     def hamiltonian(self):
         """H(x_{n+1})."""

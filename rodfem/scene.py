@@ -7,15 +7,17 @@ through the entry-point group ``rodfem.scenes`` (see pyproject.toml), so
 rodfem itself names no model.
 """
 import math
+import numbers
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Callable, Optional
 
+from .errors import InputError
 from .integrators import RULES
 
 
-class ParameterError(ValueError):
-    """Bad user input; the message is one line naming the parameter and what is allowed."""
+class ParameterError(InputError):
+    """Bad user input; the message is one line naming the parameter and what is allowed (exit code 2)."""
 
 
 @dataclass
@@ -64,7 +66,9 @@ class Parameter:
             if value not in self.choices:
                 raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
             return
-        bad = not math.isfinite(value)
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
+        bad = not math.isfinite(value) or (self.kind is int and value != int(value))
         if self.low is not None:
             bad |= value <= self.low if self.low_open else value < self.low
         if self.high is not None:
@@ -76,11 +80,12 @@ class Parameter:
 def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
     """The parameters every scene has."""
     return [
-        Parameter("n_elements", n_elements, "", "number of finite elements", low=1),
+        Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
         Parameter("dt", dt, "s", "time step h", low=0, low_open=True),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
-        Parameter("frames", frames, "", "number of centreline frames written", low=1),
+        Parameter("frames", frames, "", "centreline frames written, evenly spaced with t = 0 and t_end "
+                  "(1: t_end only; every time level when there are fewer steps)", low=1),
     ]
 
 
@@ -119,7 +124,7 @@ class Scene:
                 p[name] = q.parse(value)
             else:
                 q.check(value)
-                p[name] = value
+                p[name] = int(value) if q.kind is int else value
         return p
 
 

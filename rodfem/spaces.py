@@ -11,6 +11,7 @@ import ufl
 from dolfinx import fem
 
 from . import compat
+from .errors import InputError
 
 
 @dataclass(frozen=True)
@@ -24,6 +25,11 @@ class Field:
     @property
     def size(self):
         return int(np.prod(self.shape)) if self.shape else 1
+
+
+def dofs_per_element(fields):
+    """Dofs per element of a long mesh: P_k shares its end nodes (k per element), DG_k does not (k + 1)."""
+    return sum((f.degree if f.family == "P" else f.degree + 1) * f.size for f in fields)
 
 
 class StateSpace:
@@ -66,9 +72,17 @@ class StateSpace:
         Vi, dofs = self.collapse(name)
         fi = fem.Function(Vi)
         if isinstance(value, ufl.core.expr.Expr):
+            if value.ufl_shape != tuple(self.field(name).shape):
+                raise InputError(f"initial value of field '{name}': shape {value.ufl_shape}, "
+                                 f"the field has shape {tuple(self.field(name).shape)}")
             fi.interpolate(fem.Expression(value, Vi.element.interpolation_points()))
         else:
-            fi.interpolate(value)
+            try:
+                fi.interpolate(value)
+            except RuntimeError as e:  # DOLFINx names neither the field nor the shape it wanted
+                want = f"({self.field(name).size}, npoints)" if self.field(name).shape else "(npoints,)"
+                raise InputError(f"initial value of field '{name}': a function of x (shape (3, npoints)) "
+                                 f"returning shape {want} is needed ({e})") from None
         u.x.array[dofs] = fi.x.array
         u.x.scatter_forward()
 

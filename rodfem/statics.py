@@ -70,7 +70,7 @@ class RestStep(Step):
 
     def __init__(self, X, rates=None):
         self.x0 = self.x1 = X
-        self.rates, self.rule, self.h = rates, "midpoint", None
+        self.rates, self.rule, self.h = rates, "midpoint", 0.0   # h -> 0: the time-continuous rows
 
     def mid(self, name):
         return self.x1[name]
@@ -340,14 +340,14 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as the state at step 0,
     from which ``rodfem run --resume out`` starts a dynamic run (at rest, pre-stressed).
     Returns (problem, StaticResult, summary)."""
-    import json
     import os
     import time
+    from contextlib import nullcontext
 
     from mpi4py import MPI
 
-    from . import __version__
-    from .output import RunWriter, plot_shapes
+    from . import __version__, checkpoint
+    from .output import OutDir, RunWriter, plot_shapes, write_json
     from .scene import Scene, load
 
     comm = comm or MPI.COMM_WORLD
@@ -357,39 +357,48 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     t = p["t_end"] if t is None else float(t)
     if steps < 1:
         raise ParameterError(f"--load-steps must be an integer >= 1 (got {steps})")
-    problem = scene.build(p, comm)
-    writer = RunWriter(out, problem, 1, 1) if out else None
-    if writer:
-        writer.frame(0.0)
-    t0 = time.perf_counter()
-    statics = Statics(problem)
-    result = statics.solve(t, steps, adaptive)
-    wall = time.perf_counter() - t0
-    obs = problem.observe()
-    summary = {"scene": scene.name, "mode": "static", "status": "completed", "rodfem_version": __version__,
-               "parameters": p, "t": t, "load_steps": len(result.steps), "load_steps_halved": result.failed,
-               "initial_load_steps": steps, "adaptive": adaptive, "newton_its": result.newton_its,
-               "wall_time_s": wall, "dofs": problem.dofs, "n_elements": problem.n_elements,
-               "mpi_ranks": comm.size, "equilibrium": obs}
-    ref = scene.reference(p) if scene.reference and t == p["t_end"] else None
-    if ref:
-        scale = ref.get("scale", 1.0)
-        errs = {k: abs(obs[k] - v) for k, v in ref.items() if k != "scale" and k in obs}
-        summary["reference"] = ref
-        summary["error"] = max(errs.values()) if errs else None
-        summary["error_relative"] = summary["error"] / scale if errs else None
-    if out:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
-        from . import checkpoint
-        checkpoint.save(out, problem, checkpoint._Layout(problem), 0, None, problem.hamiltonian(), 0.0,
-                        {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
-    if writer:
-        writer.frame(1.0)
-        if comm.rank == 0:
-            with open(os.path.join(out, "loadsteps.csv"), "w") as f:
-                f.write("mu,newton_its,residual\n")
-                for s in result.steps:
-                    f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
-            with open(os.path.join(out, "summary.json"), "w") as f:
-                json.dump(summary, f, indent=2, default=float)
-            plot_shapes(os.path.join(out, "shapes.png"), writer.snapshots)
+    outdir = OutDir(out, comm) if out else None
+    started = {"scene": scene.name, "mode": "static", "status": "running", "parameters": p, "t": t,
+               "mpi_ranks": comm.size, "pid": os.getpid()}
+    with outdir.claimed(started) if outdir else nullcontext():
+        problem = scene.build(p, comm)
+        writer = RunWriter(outdir, problem, 1, 2) if outdir else None
+        if writer:
+            writer.frame(0.0)
+        t0 = time.perf_counter()
+        statics = Statics(problem)
+        try:
+            result = statics.solve(t, steps, adaptive)
+        except StaticFailure as fail:
+            if outdir:
+                outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                          dict(started, status="static-failure", failure=str(fail)))
+            raise
+        wall = time.perf_counter() - t0
+        obs = problem.observe()
+        summary = {"scene": scene.name, "mode": "static", "status": "completed", "rodfem_version": __version__,
+                   "parameters": p, "t": t, "load_steps": len(result.steps), "load_steps_halved": result.failed,
+                   "initial_load_steps": steps, "adaptive": adaptive, "newton_its": result.newton_its,
+                   "wall_time_s": wall, "dofs": problem.dofs, "n_elements": problem.n_elements,
+                   "mpi_ranks": comm.size, "equilibrium": obs}
+        ref = scene.reference(p) if scene.reference and t == p["t_end"] else None
+        if ref:
+            scale = ref.get("scale", 1.0)
+            errs = {k: abs(obs[k] - v) for k, v in ref.items() if k != "scale" and k in obs}
+            summary["reference"] = ref
+            summary["error"] = max(errs.values()) if errs else None
+            summary["error_relative"] = summary["error"] / scale if errs else None
+        if outdir:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
+            checkpoint.save(outdir, problem, checkpoint._Layout(problem), 0, None, problem.hamiltonian(), 0.0,
+                            {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
+            writer.frame(1.0)
+
+            def write_loadsteps(path):
+                with open(path, "w") as f:
+                    f.write("mu,newton_its,residual\n")
+                    for s in result.steps:
+                        f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
+            outdir.do("write loadsteps.csv", write_loadsteps, outdir.file("loadsteps.csv"))
+            outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
+            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots)
     return problem, result, summary

@@ -49,7 +49,6 @@ A Newton failure does not end a study: its row says ``newton-failure`` with
 step, time and residual, and it is left out of the fits and the plot.
 """
 import csv
-import json
 import math
 import os
 
@@ -57,6 +56,7 @@ import numpy as np
 from mpi4py import MPI
 
 from .newton import NewtonFailure
+from .output import OutDir, write_json
 from .scene import ParameterError, Scene, load
 from .timeloop import steps_for
 
@@ -212,7 +212,7 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
     # -- errors -------------------------------------------------------------
     first = next((r for r in runs.values() if r["result"] is not None), None)
     if first is None:
-        raise RuntimeError("every run of the study failed (Newton); see the failures above")
+        raise NewtonFailure(**next(iter(runs.values()))["failure_info"])  # every run failed: report the first
     cols = compared_columns(first["result"].rows[-1], analytic)
     if analytic:
         q_ref = np.array([analytic[c] for c in cols], dtype=float)
@@ -274,20 +274,23 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
              "orders": orders, "paths": {k: [[n, dt] for n, dt in v] for k, v in paths.items()},
              "failures": [{"n_elements": r["n_elements"], "dt": r["dt"], **r["failure_info"]}
                           for r in runs.values() if r["status"] != "completed"]}
-    if MPI.COMM_WORLD.rank == 0:
-        os.makedirs(out, exist_ok=True)
-        write_csv(os.path.join(out, "study.csv"), rows)
-        with open(os.path.join(out, "study.json"), "w") as f:
-            json.dump(study, f, indent=2, default=float)
-        write_md(os.path.join(out, "study.md"), study, rows)
-        if plot:
-            plot_study(os.path.join(out, "study.png"), study, rows)
+    OutDir(out, MPI.COMM_WORLD).do("write the study", write_files, out, study, rows, plot)
     for name, o in orders.items():
         say(f"path {name:5s}: observed order {_fmt(o['order'])} (against the reference), "
             f"self-convergence order {_fmt(o['self_order'])}")
     say(f"results in {out}/: study.csv, study.json, study.md, study.png")
     study["rows"] = rows
     return study
+
+
+def write_files(out, study, rows, plot=True):
+    """study.csv, study.json, study.md and (plot) study.png in `out`."""
+    os.makedirs(out, exist_ok=True)
+    write_csv(os.path.join(out, "study.csv"), rows)
+    write_json(os.path.join(out, "study.json"), study)
+    write_md(os.path.join(out, "study.md"), study, rows)
+    if plot:
+        plot_study(os.path.join(out, "study.png"), study, rows)
 
 
 def _fmt(x, spec=".2f"):

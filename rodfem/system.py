@@ -72,6 +72,7 @@ class System:
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
+        self.t = 0.0  # the time of the state x_n (the time loop advances it)
         self.momentum = momentum
         self.bodies, self.joints, self.markers, self.recorders = {}, [], {}, []
         self._ready = False
@@ -245,6 +246,16 @@ class System:
     def supplied_work(self):
         """h y.u of the last step: the bodies' ports and the driven joints."""
         return self._sum("work") + self.assembler.joint_work
+
+    @property
+    def dissipates(self):
+        """True if a body dissipates (rodfem/model.py: `dissipation`)."""
+        self.build()
+        return any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+
+    def dissipated_energy(self):
+        """h d_n of the last step: the sum over the dissipating bodies."""
+        return self._sum("dissipation")
 
     def observe(self):
         self.build()

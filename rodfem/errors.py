@@ -1,0 +1,53 @@
+"""How a run ends, and the agreement of an error across MPI ranks.
+
+Exit codes of the command line (README, "Exit codes"):
+
+* 0   completed;
+* 2   bad input or environment (`InputError`: a parameter, ``--out``, the JIT
+      cache, a PETSc option, not enough memory);
+* 3   numerical failure (`rodfem.newton.NewtonFailure`);
+* 130 / 143  interrupted by SIGINT / SIGTERM (`Interrupted`: 128 + signal number).
+
+Under MPI every rank must raise the same error at the same point, or the
+ranks that did not fail wait for ever in their next collective operation:
+`agreed` is the one place where a rank's local failure becomes everyone's.
+"""
+import signal
+from contextlib import contextmanager
+
+
+class InputError(ValueError):
+    """Bad input or environment (exit code 2); the message is one line naming what is wrong and what is allowed."""
+
+    exit_code = 2
+
+
+class Interrupted(Exception):
+    """The run was stopped by a signal between two time steps (exit code 128 + signal number)."""
+
+    def __init__(self, signum, step=0, t=0.0):
+        self.signum, self.step, self.t = int(signum), step, t
+        self.signal = signal.Signals(self.signum).name
+        self.exit_code = 128 + self.signum
+        super().__init__(f"interrupted by {self.signal} after step {step} (t = {t:.6g})")
+
+
+@contextmanager
+def agreed(comm):
+    """Run the block on every rank of `comm`; if it raises an InputError on any rank, raise one on every rank.
+
+    The failing rank raises its own error, the others an InputError with the message of the first
+    failing rank.  Collective: every rank must enter the block, and the block itself must contain no
+    collective operation (a rank that failed early would leave the others waiting in it).
+    """
+    error = None
+    try:
+        yield
+    except InputError as e:
+        error = e
+    messages = comm.allgather(None if error is None else str(error))
+    if error is not None:
+        raise error
+    first = next((m for m in messages if m is not None), None)
+    if first is not None:
+        raise InputError(first)

@@ -1,0 +1,345 @@
+"""Issue 13: every failure ends with one line on stderr and its exit code (2 bad input or
+environment, 3 numerical failure, 130/143 interrupted), under mpirun too, and leaves a
+recognisable output directory.  Small sizes: a few steps, a few elements."""
+import csv
+import fcntl
+import glob
+import json
+import os
+import re
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from rodfem.cli import main
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+RODFEM = os.path.join(os.path.dirname(sys.executable), "rodfem")
+RU = ["roll-up-2d", "--set", "t_end=0.05", "--set", "dt=0.01", "--set", "n_elements=4", "--quiet"]
+LONG = ["flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=1000", "--set", "dt=0.01", "--quiet"]
+
+
+def env(**extra):
+    return dict(os.environ, OMP_NUM_THREADS="1", **extra)
+
+
+def cli(*args, np=None, extra_env=None, timeout=120, **kw):
+    """rodfem ARGS in a subprocess (under `timeout 120 mpirun -n np` if np); CompletedProcess."""
+    cmd = [RODFEM, *args]
+    if np:
+        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q",
+               "-n", str(np), *cmd]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env(**(extra_env or {})), cwd=REPO,
+                          timeout=timeout + 10, **kw)
+
+
+def one_line(stderr, start="rodfem: error:"):
+    """The single line on stderr (asserted), starting with `start`."""
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(start), stderr[-3000:]
+    return lines[0]
+
+
+def history(out):
+    with open(os.path.join(out, "history.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def summary(out):
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def leftovers(out):
+    """Half-written files: temporaries and empty files."""
+    files = glob.glob(os.path.join(out, "**", "*"), recursive=True) + glob.glob(os.path.join(out, "**", ".*.tmp"),
+                                                                               recursive=True)
+    return [f for f in files if f.endswith(".tmp") or (os.path.isfile(f) and os.path.getsize(f) == 0
+                                                       and not f.endswith(".rodfem.lock"))]
+
+
+# -- bad input: refused before anything runs (items 5, 7, 9, 10, 11, 14) ----------------------------
+
+@pytest.mark.parametrize("args, words", [
+    (["run", *RU, "--set", "dt=1e-300"], ["'dt'", "steps", "limit of 1e+07"]),                    # 5
+    (["run", *RU, "--set", "t_end=1e12", "--set", "dt=1"], ["'dt'", "1e+12 steps"]),              # 5
+    (["run", "flying-spaghetti-2d", "--set", "t_end=1e-9", "--set", "dt=7e-10"], ["'dt'", "whole number"]),  # 7
+    (["run", *RU, "--set", "n_elements=1e20"], ["n_elements", "GB", "elements fit"]),             # 10
+    (["run", *RU, "--set", "n_elements=2.5"], ["'n_elements'", "integer"]),                       # 10
+    (["run", *RU, "--set", "t_end=1e308", "--set", "dt=1e-308"], ["'dt'", "limit"]),              # 11
+    (["study", "roll-up-2d", "--dt", "0", "--elements", "4"], ["--dt 0", "> 0"]),                  # 14
+])
+def test_bad_input_is_refused_in_one_line(args, words, capsys, tmp_path):
+    out = tmp_path / "out"
+    assert main([*args, "--out", str(out)]) == 2
+    line = one_line(capsys.readouterr().err)
+    for w in words:
+        assert w in line
+    # refused before the output directory is touched, or (found while building) recorded there
+    assert not out.exists() or summary(out)["status"] == "error"
+
+
+@pytest.mark.parametrize("where", ["file", "/proc/x", "long", "/sys/rodfem"])
+def test_bad_out_is_one_line(where, capsys, tmp_path):  # 9
+    (tmp_path / "file").write_text("not a directory")
+    out = {"file": str(tmp_path / "file"), "long": str(tmp_path / ("a" * 300))}.get(where, where)
+    assert main(["run", *RU, "--out", out]) == 2
+    line = one_line(capsys.readouterr().err)
+    assert line.startswith(f"rodfem: error: --out {out!r}: cannot create the directory")
+
+
+def test_memory_estimate_refuses_what_cannot_fit(monkeypatch):  # 10
+    from mpi4py import MPI
+
+    from rodfem import limits
+    from rodfem.errors import InputError
+    monkeypatch.setattr(limits, "available_memory", lambda ranks=1: 1e9)
+    assert limits.check_elements(10**5, 9, MPI.COMM_WORLD) == 10**5  # 0.95 GB
+    with pytest.raises(InputError, match=r"n_elements = 1000000 needs about 9.45 GB .* at most about 105820"):
+        limits.check_elements(10**6, 9, MPI.COMM_WORLD)
+
+
+# -- the output directory (items 3, 6, 9; frames) ------------------------------------------------------
+
+def test_a_directory_in_use_is_refused(capsys, tmp_path):  # 3
+    out = tmp_path / "out"
+    out.mkdir()
+    with open(out / ".rodfem.lock", "w") as lock:
+        lock.write("4242\n")
+        lock.flush()
+        fcntl.flock(lock, fcntl.LOCK_EX)  # another run holds it
+        assert main(["run", *RU, "--out", str(out)]) == 2
+        line = one_line(capsys.readouterr().err)
+        assert "is in use by another rodfem run (pid 4242)" in line
+        assert sorted(os.listdir(out)) == [".rodfem.lock", "centreline"]
+    assert main(["run", *RU, "--out", str(out)]) == 0  # free again
+
+
+def test_a_new_run_replaces_the_previous_runs_files(tmp_path):  # 6, frames
+    out = tmp_path / "out"
+    fs = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--quiet", "--out", str(out)]
+    assert main([*fs, "--set", "t_end=3"]) == 0
+    assert len(list((out / "centreline").glob("*.vtu"))) == 31
+    (out / "notes.txt").write_text("mine")
+    assert main([*fs, "--set", "t_end=2", "--set", "frames=4"]) == 0
+    vtus = sorted((out / "centreline").glob("*.vtu"))
+    times = [float(t) for t in re.findall(r'timestep="([^"]+)"', (out / "centreline.pvd").read_text())]
+    assert len(vtus) == 4 and len(times) == 4 and times[0] == 0.0 and times[-1] == pytest.approx(2.0)
+    assert len(history(out)) == 21 and summary(out)["parameters"]["t_end"] == 2.0
+    assert summary(out)["status"] == "completed"
+    assert (out / "notes.txt").read_text() == "mine" and not leftovers(out)
+
+
+def test_frames_one_is_the_end_state(tmp_path):
+    assert main(["run", *RU, "--set", "frames=1", "--out", str(tmp_path)]) == 0
+    assert re.findall(r'timestep="([^"]+)"', (tmp_path / "centreline.pvd").read_text()) == ["0.05"]
+
+
+def test_a_full_disk_is_one_line_and_keeps_a_summary(tmp_path):  # 9: writes fail as on a full disk
+    out = tmp_path / "out"
+    code = ("import resource, sys\nfrom rodfem.cli import main\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (6000, 6000))\n"  # after MPI_Init: files of at most 6 kB
+            f"sys.exit(main({['run', *LONG, '--set', 't_end=10', '--out', str(out)]!r}))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=120)
+    assert p.returncode == 2
+    assert "cannot write history.csv (File too large)" in one_line(p.stderr)
+    assert summary(out)["status"] == "error" and not leftovers(out)
+
+
+# -- numerical failure and PETSc options (items 12, 16) -----------------------------------------------
+
+def test_a_nan_residual_is_not_recorded_as_zero(capsys, tmp_path):  # 16
+    args = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--set", "Fx=1e300", "--set", "t_end=1"]
+    assert main([*args, "--quiet", "--out", str(tmp_path)]) == 3
+    assert "residual nan" in one_line(capsys.readouterr().err)
+    s = summary(tmp_path)
+    assert s["status"] == "newton-failure" and s["failure"]["residual"] == "nan"
+
+
+@pytest.mark.parametrize("option, words", [
+    ("-rodfem_snes_max_it abc", "PETSc refused an option"),                    # when the solver is set up
+    ("-rodfem_pc_type nonexistent", "Unable to find requested PC type"),
+    ("-rodfem_pc_factor_mat_solver_type nonexistent", "PETSc stopped at step 1"),  # when it first solves
+])
+def test_a_bad_petsc_option_is_one_line(option, words, tmp_path):  # 12
+    p = cli("run", *RU, "--out", str(tmp_path), extra_env={"PETSC_OPTIONS": option})
+    assert p.returncode == 2
+    line = one_line(p.stderr)
+    assert words in line and option in line
+
+
+# -- the API (items 17, 18) ------------------------------------------------------------------------------
+
+def _roll_up(n=4):
+    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem import Load, Problem, Support, ramp
+    beam = PlanarBeam(rhoA=0.0, rhoI=0.0, energy=quadratic(EA=1e4, GA=1e4, EI=500.0))
+    return Problem(beam, 10.0, n, loads=[Load("omega", ramp(2 * np.pi * 500 / 10, 1.0), "right")],
+                   supports=[Support("left", "clamped")], initial={"r": lambda x: np.vstack([x[0], 0 * x[0]])})
+
+
+def test_api_names_the_parameter():  # 17
+    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem import InputError, Problem
+    from rodfem.driver import run_scene
+    from rodfem.scene import ParameterError
+    with pytest.raises(ParameterError, match="'n_elements' must be an integer"):
+        run_scene("roll-up-2d", {"n_elements": 2.5})
+    with pytest.raises(ValueError, match="rhoA must be a number >= 0"):
+        PlanarBeam(rhoA=-1, rhoI=1.0, energy=quadratic(EA=1.0, GA=1.0, EI=1.0))
+    beam = PlanarBeam(rhoA=1.0, rhoI=1.0, energy=quadratic(EA=1.0, GA=1.0, EI=1.0))
+    with pytest.raises(InputError, match="n_elements must be a whole number >= 1"):
+        Problem(beam, 1.0, 0)
+    with pytest.raises(InputError, match=r"initial value of field 'r'.* shape \(2, npoints\)"):
+        Problem(beam, 1.0, 2, initial={"r": lambda x: x[0]})
+
+
+def test_a_second_run_continues_in_time():  # 18
+    from rodfem import run
+    p, q = _roll_up(), _roll_up()
+    run(p, 0.1, 0.5)
+    second = run(p, 0.1, 1.0)
+    whole = run(q, 0.1, 1.0)
+    assert second.rows[0]["t"] == 0.5 and second.rows[-1]["t"] == pytest.approx(1.0) and p.t == q.t
+    for k in ("tip_x", "tip_y"):
+        assert second.rows[-1][k] == pytest.approx(whole.rows[-1][k], abs=1e-12)
+    with pytest.raises(ValueError, match="not after the problem's time t = 1"):
+        run(p, 0.1, 1.0)
+
+
+# -- interrupts and the standard streams (items 8, 15) -------------------------------------------------
+
+def wait_for_rows(out, rows=20, timeout=60):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        try:
+            if len(history(out)) >= rows:
+                return
+        except (OSError, ValueError):
+            pass
+        time.sleep(0.05)
+    raise AssertionError("the run wrote no rows")
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_stops_between_steps_and_keeps_the_results(sig, code, tmp_path):  # 8
+    out = str(tmp_path)
+    p = subprocess.Popen([RODFEM, "run", *LONG, "--out", out], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=env(), cwd=REPO)
+    wait_for_rows(out)
+    assert summary(out)["status"] == "running"
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == code
+    line = one_line(err, "rodfem: interrupted by " + sig.name)
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["failure"]["signal"] == sig.name
+    assert len(history(out)) == s["steps"] + 1 and f"after step {s['steps']} " in line
+    assert os.path.getsize(os.path.join(out, "shapes.png")) > 1000 and not leftovers(out)
+
+
+def test_a_full_or_closed_stdout(tmp_path):  # 15
+    full = subprocess.run(f'"{RODFEM}" run {" ".join(RU)} --out {tmp_path}/a > /dev/full', shell=True,
+                          capture_output=True, text=True, env=env())
+    assert full.returncode == 2
+    assert one_line(full.stderr) == "rodfem: error: cannot write to standard output (No space left on device)"
+    closed = subprocess.run(f'"{RODFEM}" run {" ".join(RU)} --out {tmp_path}/b >&-', shell=True,
+                            capture_output=True, text=True, env=env())
+    assert closed.returncode == 0 and closed.stderr == ""
+    assert summary(tmp_path / "b")["status"] == "completed"
+
+
+# -- the JIT cache (items 4, 13), in a cache of its own -------------------------------------------------
+
+def stale(cache):
+    return [f for f in glob.glob(f"{cache}/fenics/*.c") if not os.path.exists(f + ".cached")]
+
+
+def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):  # 4, 13
+    cache, out = tmp_path / "cache", str(tmp_path / "out")
+    xdg = {"XDG_CACHE_HOME": str(cache)}
+    # Ctrl-C during the first compilation (to the process group: the C compiler gets it too)
+    p = subprocess.Popen([RODFEM, "run", *RU, "--set", "t_end=100", "--out", out], stderr=subprocess.PIPE,
+                         text=True, env=env(**xdg), cwd=REPO, start_new_session=True)  # the forms of RU
+    t0 = time.time()
+    while not stale(cache) and time.time() - t0 < 60:
+        time.sleep(0.02)
+    os.killpg(p.pid, signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130, err[-3000:]
+    one_line(err, "rodfem: interrupted by SIGINT after step 0")
+    assert summary(out)["status"] == "interrupted"
+    assert cli("run", *RU, "--out", out, extra_env=xdg).returncode == 0
+    # a compilation killed outright leaves NAME.c without NAME.c.cached: removed, not waited for
+    for f in glob.glob(f"{cache}/fenics/libffcx_forms_*.c.cached"):
+        os.unlink(f)
+    t0 = time.time()
+    p = cli("run", *RU, "--out", out, extra_env=xdg)
+    assert p.returncode == 0 and time.time() - t0 < 9, p.stderr[-3000:]  # ffcx would wait 10 s, then fail
+    assert not stale(cache)
+    # a damaged module: one line with the remedy
+    for so in glob.glob(f"{cache}/fenics/libffcx_forms_*.so"):
+        os.truncate(so, 100)
+    p = cli("run", *RU, "--out", out, extra_env=xdg)
+    assert p.returncode == 2
+    assert f"the JIT cache {cache}/fenics is damaged" in one_line(p.stderr) and "rm -rf" in p.stderr
+    # a cache that cannot be created
+    p = cli("run", *RU, "--out", out, extra_env={"XDG_CACHE_HOME": os.path.join(out, "summary.json")})
+    assert p.returncode == 2 and "set XDG_CACHE_HOME to a writable directory" in one_line(p.stderr)
+
+
+# -- under mpirun -n 2: the ranks agree, none is left waiting (items 1, 2, 8, 9, 12) ----------------------
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("case, words", [
+    ("out-is-a-file", "cannot create the directory"),                         # 1
+    ("one-element", "n_elements = 1 is fewer than the 2 MPI ranks"),          # 2
+    ("petsc-option", "Unable to find requested PC type"),                     # 12
+])
+def test_mpi_errors_are_agreed(case, words, tmp_path):
+    (tmp_path / "file").write_text("")
+    args = {"out-is-a-file": ["--out", str(tmp_path / "file")],
+            "one-element": ["--set", "n_elements=1", "--out", str(tmp_path / "o")],
+            "petsc-option": ["--out", str(tmp_path / "o")]}[case]
+    extra = {"PETSC_OPTIONS": "-rodfem_pc_type nonexistent"} if case == "petsc-option" else None
+    p = cli("run", *RU, *args, np=2, extra_env=extra)
+    assert p.returncode == 2, p.stderr[-3000:]  # 124: timeout, a rank was left waiting
+    assert words in one_line(p.stderr)
+
+
+def children(pid):
+    """Pids of the processes whose parent is `pid` (from /proc)."""
+    found = []
+    for stat in glob.glob("/proc/[0-9]*/stat"):
+        try:
+            with open(stat) as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.split("/")[2]))
+    return found
+
+
+@pytest.mark.mpi
+def test_mpi_interrupt_of_one_rank_stops_both(tmp_path):  # 8: rank 1 sees no signal, stops all the same
+    out = str(tmp_path)
+    cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n", "2", RODFEM, "run",
+           *LONG, "--out", out]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env(), cwd=REPO)
+    wait_for_rows(out)
+    ranks = children(p.pid)
+    assert len(ranks) == 2
+    os.kill(min(ranks), signal.SIGTERM)  # one rank only (as a batch system's kill of one task would)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 143
+    one_line(err, "rodfem: interrupted by SIGTERM")
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["mpi_ranks"] == 2 and len(history(out)) == s["steps"] + 1
+    assert os.path.getsize(os.path.join(out, "energy.png")) > 1000
