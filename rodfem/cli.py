@@ -125,9 +125,9 @@ def cmd_modes(args):
                             count=args.count, solver=args.solver)
     say(f"{info['scene']}: {len(omega)} modes about the {args.about} state ({info['solver']} eigensolver, "
         f"{info['n_states']} states)")
-    say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s}")
+    say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s} {'damping':>10s}")
     for k, w in enumerate(omega):
-        say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g}")
+        say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g} {info['damping_ratio'][k]:10.3g}")
     say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz")
 
 

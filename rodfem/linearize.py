@@ -282,8 +282,10 @@ def ph_form(lin):
 # -- natural modes ----------------------------------------------------------------------------
 
 def natural_modes(lin, k=6, solver="auto", target=0.0):
-    """The k lowest natural angular frequencies omega (rad/s) and mode vectors (complex, retained
-    dofs) of the pencil (A_m, E_m).  Returns (omega, vectors, solver used)."""
+    """The k lowest natural angular frequencies omega (rad/s: the imaginary parts of the eigenvalues
+    s = -zeta |s| + i omega, the damped frequencies of a dissipating model) and mode vectors
+    (complex, retained dofs) of the pencil (A_m, E_m).  Returns (omega, vectors, solver used);
+    `lin.damping` holds the damping ratios zeta = -Re s / |s| of the modes (0 without dissipation)."""
     n = lin.Em.shape[0]
     if solver == "auto":
         solver = "dense" if n <= DENSE_MAX or not _have_slepc() else "slepc"
@@ -297,10 +299,13 @@ def natural_modes(lin, k=6, solver="auto", target=0.0):
     else:
         raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
     scale = max(np.max(np.abs(w.imag)), 1.0) if len(w) else 1.0
-    keep = (w.imag > 1e-9 * scale) & (np.abs(w.real) <= 1e-3 * np.abs(w)) if len(w) else []
+    # oscillating and not growing (the rest: the infinite eigenvalues of the constraints, real ones)
+    keep = (w.imag > 1e-9 * scale) & (w.real <= 1e-6 * np.abs(w)) if len(w) else []
     w, V = w[keep], V[:, keep]
     order = np.argsort(w.imag)[:k]
-    return w.imag[order], V[:, order], solver
+    w, V = w[order], V[:, order]
+    lin.damping = np.maximum(-w.real / np.abs(w), 0.0) if len(w) else np.zeros(0)
+    return w.imag, V, solver
 
 
 def _have_slepc():
@@ -464,13 +469,14 @@ def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, s
     omega, vectors, used = natural_modes(lin, count, solver)
     info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
             "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
+            "damping_ratio": [float(z) for z in lin.damping],
             "parameters": p, "wall_time_s": time.perf_counter() - t0}
     if out:
         os.makedirs(out, exist_ok=True)
         with open(os.path.join(out, "modes.csv"), "w") as fh:
-            fh.write("mode,omega_rad_s,f_Hz,period_s\n")
+            fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio\n")
             for k, w in enumerate(omega):
-                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r}\n")
+                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r},{lin.damping[k]!r}\n")
         with open(os.path.join(out, "modes.json"), "w") as fh:
             json.dump(info, fh, indent=2, default=float)
         if len(omega):

@@ -152,3 +152,25 @@ def test_bad_input_one_line(rodfem, args, words):
 def test_system_refused_by_the_api():
     with pytest.raises(ParameterError):
         Linearization(load("four-bar-2d").build(load("four-bar-2d").values(), MPI.COMM_WORLD))
+
+
+def test_viscoelastic_modes_follow_the_standard_linear_solid():
+    """A Maxwell branch with 0.1 of every stiffness: the stiffness becomes K (1 + 0.1 s tau/(1 + s tau)),
+    so each eigenvalue solves tau s^3 + s^2 + 1.1 tau w0^2 s + w0^2 = 0 with w0 the elastic frequency
+    of the same mesh; R (the dashpots) is symmetric, >= 0 and nonzero."""
+    base = {"n_elements": 6, "fy": 0.0}
+    _, p, lin = prepare("viscoelastic-cantilever-2d", base)
+    w, _, _ = natural_modes(lin, 3)
+    s = -lin.damping * w / np.sqrt(1 - lin.damping**2) + 1j * w
+    _, _, elastic = prepare("viscoelastic-cantilever-2d", {**base, "EA1": 0.0, "GA1": 0.0, "EI1": 0.0})
+    w0, _, _ = natural_modes(elastic, 3)
+    tau = p["tau1"]
+    for sk, w0k in zip(s, w0):
+        roots = np.roots([tau, 1.0, 1.1 * tau * w0k**2, w0k**2])
+        exact = roots[np.argmax(roots.imag)]
+        assert abs(sk - exact) <= 1e-8 * abs(exact), (sk, exact)
+    assert np.all(lin.damping > 1e-4)
+    R = lin.R.toarray()
+    assert np.max(np.abs(R - R.T)) <= 1e-14 * np.max(np.abs(R)) and np.max(np.abs(R)) > 0
+    assert np.min(np.linalg.eigvalsh(R)) >= -1e-12 * np.max(np.abs(R))
+    assert lin.checks["ph_residual"] <= 1e-12
