@@ -174,7 +174,13 @@ class Statics:
         compiled = compile_forms(forms)
         opts = dict(OPTIONS, **(options or {}))
         if self.system:
+            # A second BlockAssembler indexes the joints again (new, equal index arrays on each
+            # joint); the System's own assembler caches positions by id() of the old arrays, so
+            # they are put back: freed arrays' ids could be reused and hit that cache.
+            kept = [(j.q_index, j.v_index, j.lam_index) for j in target.joints]
             self.assembler = StaticBlockAssembler(target, compiled)
+            for j, (q, v, lam) in zip(target.joints, kept):
+                j.q_index, j.v_index, j.lam_index = q, v, lam
             self.newton = Newton(assembler=self.assembler, options=opts, prefix=PREFIX)
             self.unknown = self.assembler.X1
         else:
