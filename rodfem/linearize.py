@@ -32,7 +32,10 @@ compressive or bending pre-stress; `checks` reports the residual
 a constraint) may be written with either sign; the rows of the models'
 constraints (+G w, the transpose of the reactions +G^T lambda) are negated
 in A and B so that J comes out skew (`checks['rows_negated']`).  `Hess` is
-the plain Hessian of H at x* (without the geometric stiffness).
+the plain Hessian of H at x* (without the geometric stiffness).  The
+decomposition assumes x* at rest (an equilibrium, or the rest state of a
+scene); about a moving state (an initial spin) the rows that depend on the
+velocities are not of that form and `checks['ph_residual']` says how much.
 
 Modes: the nonzero eigenvalues of the pencil (A, E) are +-i omega.  The rate
 form also has one zero eigenvalue per strain (the compatibility invariants
@@ -44,7 +47,8 @@ nonzero spectrum without those zeros.  Solved with SLEPc (shift-invert
 about `target`, Krylov-Schur, SuperLU) or, for at most `DENSE_MAX` dofs or
 without slepc4py, with scipy's dense QZ (`solver='dense'`).
 
-Serial only (the exported matrices are assembled on one rank).
+Serial only (the exported matrices are assembled on one rank).  Systems: the bodies' blocks
+and the joints' rows (module `Linearization`); a joint's drive is not an input of the linear model.
 """
 import numpy as np
 import scipy.sparse as sp
@@ -55,7 +59,7 @@ from mpi4py import MPI
 
 from .problem import compile_forms
 from .scene import ParameterError
-from .statics import RestStep, rest_form
+from .statics import RestStep, bodies_of, rest_form
 
 DENSE_MAX = 1500
 
@@ -82,81 +86,155 @@ def _vector(form):
     return out
 
 
+def _body_fields(body):
+    """(field name, component, s) of every dof of a body's space (its local numbering)."""
+    S = body.space
+    n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
+    field = np.empty(n, dtype=object)
+    comp = np.zeros(n, dtype=int)
+    coord = np.zeros(n)
+    for fld in S.fields:
+        if body.rigid:   # one cell: one dof per component (RigidSpace collapses nothing)
+            dofs = np.asarray(S._dofs(fld.name))
+            field[dofs], comp[dofs], coord[dofs] = fld.name, np.arange(len(dofs)), 0.5
+            continue
+        Vi, dofs = S.collapse(fld.name)
+        bs = Vi.dofmap.index_map_bs
+        xs = Vi.tabulate_dof_coordinates()[:, 0]
+        dofs = np.asarray(dofs)
+        ok = dofs < n
+        k = np.arange(len(dofs))
+        field[dofs[ok]] = fld.name
+        comp[dofs[ok]] = (k % bs)[ok]
+        coord[dofs[ok]] = xs[k // bs][ok]
+    return field, comp, coord
+
+
 class Linearization:
-    """The linear model of a Problem about its current state x_n (inputs as they are set now,
-    e.g. by a static solve); `reference`: the state of the total-form rows (default the
-    problem's initial state)."""
+    """The linear model of a Problem or a System about its current state x_n (inputs as they are
+    set now, e.g. by a static solve); `reference`: the state of the total-form rows (a Function,
+    or for a System a dict body name -> Function; default the initial state).
+
+    A System's state is its bodies' dofs in the order of the bodies, then the joints'
+    multipliers; the joints add their reactions G(q)^T lambda to the momentum rows and their
+    rows G(q) v (rate form; E = 0) or g(q) - g_p (the pencil of modes)."""
 
     def __init__(self, problem, reference=None):
-        if isinstance(getattr(problem, "bodies", None), dict):
-            raise ParameterError("linearize and modes take one-body scenes (a System is not supported yet)")
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
-        self.problem = body = problem
+        self.problem = problem
+        self.system = isinstance(getattr(problem, "bodies", None), dict)
+        if self.system:
+            problem.build()
+        bodies = bodies_of(problem)
+        parts = []
+        for name, body in bodies:
+            ref = reference.get(name) if isinstance(reference, dict) else reference
+            parts.append(self._body(name, body, ref if ref is not None else body.state0))
+        self.X = parts[0]["X"] if not self.system else None
+        sizes = [p["n"] for p in parts]
+        n_lam = problem.lam_space.dofmap.index_map.size_local * problem.lam_space.dofmap.index_map_bs \
+            if self.system and problem.lam_space is not None else 0
+        full = {}
+        for k in ("E", "A", "Em", "Am", "Hess"):
+            blocks = [p[k] for p in parts] + ([sp.csr_matrix((n_lam, n_lam))] if n_lam else [])
+            full[k] = sp.lil_matrix(sp.block_diag(blocks, format="csr"))
+        f0 = np.concatenate([p["f0"] for p in parts] + [np.zeros(n_lam)])
+        N = f0.size
+        Bcols = [np.concatenate([p["Bcols"][j] if i == b else np.zeros(sizes[i]) for i in range(len(parts))]
+                                + [np.zeros(n_lam)]) for b, p in enumerate(parts) for j in range(len(p["Bcols"]))]
+        Crows = [np.concatenate([p["Crows"][j] if i == b else np.zeros(sizes[i]) for i in range(len(parts))]
+                                + [np.zeros(n_lam)]) for b, p in enumerate(parts) for j in range(len(p["Crows"]))]
+        self.inputs = [(f"{p['name']}.{x}" if self.system else x) for p in parts for x in p["inputs"]]
+        if self.system and self.problem.joints:
+            self._joints(full, f0)
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        self.free = np.concatenate([offsets[i] + p["free"] for i, p in enumerate(parts)]
+                                   + [offsets[-1] + np.arange(n_lam)]).astype(int)
+        f = self.free
+        self.E, self.A, self.Em, self.Am, self.Hess = (sp.csr_matrix(full[k])[f][:, f].tocsr()
+                                                      for k in ("E", "A", "Em", "Am", "Hess"))
+        self.f0 = f0[f]
+        self.B = sp.csr_matrix(np.column_stack(Bcols)[f]) if Bcols else sp.csr_matrix((len(f), 0))
+        self.C = sp.csr_matrix(np.vstack(Crows)[:, f]) if Crows else sp.csr_matrix((0, len(f)))
+        states = []
+        for p in parts:
+            states += [((f"{p['name']}.{fl}" if self.system else fl), c, x, k) for fl, c, x, k in p["states"]]
+        states += [("joints.lambda", i, 0.0, "other") for i in range(n_lam)]
+        self.states = [states[i] for i in f] if len(states) == N else states
+        self.parts, self.offsets = parts, offsets
+        self.J, self.R, self.Q, self.checks = ph_form(self)
+
+    def _body(self, name, body, ref):
+        """The matrices of one body (its local numbering, all dofs) at its state x_n."""
         S, model = body.space, body.model
-        self.X = fem.Function(S.V)
-        self.X.x.array[:] = body.x0.x.array
-        self.Xdot = fem.Function(S.V)
-        ref = reference if reference is not None else body.state0
-        F_rate = rest_form(body, self.X, ref, rates=self.Xdot, total=False)
-        F_tot = rest_form(body, self.X, ref, rates=self.Xdot, total=True)
-        H = model.hamiltonian(S.split(self.X), body.dx, body.ds)
-        step = RestStep(S.split(self.X))
+        X, Xdot = fem.Function(S.V), fem.Function(S.V)
+        X.x.array[:] = body.x0.x.array
+        F_rate = rest_form(body, X, ref, rates=Xdot, total=False)
+        F_tot = rest_form(body, X, ref, rates=Xdot, total=True)
+        H = model.hamiltonian(S.split(X), body.dx, body.ds)
+        step = RestStep(S.split(X))
         test = S.split(ufl.TestFunction(S.V))
-        forms = {"E": ufl.derivative(F_rate, self.Xdot), "A": -ufl.derivative(F_rate, self.X),
-                 "Em": ufl.derivative(F_tot, self.Xdot), "Am": -ufl.derivative(F_tot, self.X),
-                 "Hess": ufl.derivative(ufl.derivative(H, self.X), self.X), "f0": -F_rate}
+        forms = {"E": ufl.derivative(F_rate, Xdot), "A": -ufl.derivative(F_rate, X),
+                 "Em": ufl.derivative(F_tot, Xdot), "Am": -ufl.derivative(F_tot, X),
+                 "Hess": ufl.derivative(ufl.derivative(H, X), X), "f0": -F_rate}
         for k, load in enumerate(body.loads):
             forms[f"B{k}"] = -load.input_map(step, test, body.dx, body.ds)
-            forms[f"C{k}"] = ufl.derivative(load.power(step, body.dx, body.ds), self.X)
+            forms[f"C{k}"] = ufl.derivative(load.power(step, body.dx, body.ds), X)
         c = compile_forms(forms)
-        full = {k: _matrix(c[k]) for k in ("E", "A", "Em", "Am", "Hess")}
-        f0 = _vector(c["f0"])
-        Bcols, Crows, self.inputs = [], [], []
+        out = {k: _matrix(c[k]) for k in ("E", "A", "Em", "Am", "Hess")}
+        out["f0"] = _vector(c["f0"])
+        out["Bcols"], out["Crows"], out["inputs"] = [], [], []
         for k, load in enumerate(body.loads):
             saved = np.array(load.constant.value, dtype=float, copy=True)
             for j in range(saved.size):
                 e = np.zeros(saved.size)
                 e[j] = 1.0
                 load.constant.value = e.reshape(saved.shape)
-                Bcols.append(_vector(c[f"B{k}"]))
-                Crows.append(_vector(c[f"C{k}"]))
-                self.inputs.append(f"{load.name}[{j}]" if saved.size > 1 else load.name)
+                out["Bcols"].append(_vector(c[f"B{k}"]))
+                out["Crows"].append(_vector(c[f"C{k}"]))
+                out["inputs"].append(f"{load.name}[{j}]" if saved.size > 1 else load.name)
             load.constant.value = saved
         n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
         fixed = np.unique(np.concatenate([bc.dof_indices()[0] for bc in body.bcs])) if body.bcs else np.zeros(0, int)
-        self.free = np.setdiff1d(np.arange(n), fixed)
-        f = self.free
-        self.E, self.A, self.Em, self.Am, self.Hess = (full[k][f][:, f].tocsr() for k in ("E", "A", "Em", "Am", "Hess"))
-        self.f0 = f0[f]
-        self.B = (sp.csr_matrix(np.column_stack(Bcols)[f]) if Bcols else sp.csr_matrix((len(f), 0)))
-        self.C = (sp.csr_matrix(np.vstack(Crows)[:, f]) if Crows else sp.csr_matrix((0, len(f))))
-        self.states = self._describe()
-        self.J, self.R, self.Q, self.checks = ph_form(self)
-
-    # -- the ordering of the state ---------------------------------------------------
-    def _describe(self):
-        """One row per retained dof: (field, component, s, kind) in the order of the matrices."""
-        S = self.problem.space
-        n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
-        field = np.empty(n, dtype=object)
-        comp = np.zeros(n, dtype=int)
-        coord = np.zeros(n)
-        for fld in S.fields:
-            Vi, dofs = S.collapse(fld.name)
-            bs = Vi.dofmap.index_map_bs
-            xs = Vi.tabulate_dof_coordinates()[:, 0]
-            dofs = np.asarray(dofs)
-            ok = dofs < n
-            k = np.arange(len(dofs))
-            field[dofs[ok]] = fld.name
-            comp[dofs[ok]] = (k % bs)[ok]
-            coord[dofs[ok]] = xs[k // bs][ok]
-        kin = getattr(self.problem.model, "kinematics", {})
+        field, comp, coord = _body_fields(body)
+        kin = getattr(model, "kinematics", {})
         kinds = {q: "position" for q in kin}
         kinds.update({v: "velocity" for v in kin.values()})
-        f = self.free
-        return [(field[i], int(comp[i]), float(coord[i]), kinds.get(field[i], "other")) for i in f]
+        out.update(name=name, body=body, X=X, n=n, free=np.setdiff1d(np.arange(n), fixed),
+                   states=[(field[i], int(comp[i]), float(coord[i]), kinds.get(field[i], "other")) for i in range(n)])
+        return out
+
+    def _joints(self, full, f0):
+        """The joints' rows and reactions at the System's state (serial: block indices = global)."""
+        A = self.problem.assembler
+        x = A.X0.getArray(readonly=True)
+        for j in self.problem.joints:
+            q, v, lam = x[j.q_index], x[j.v_index], x[j.lam_index]
+            G = np.einsum("kij,j->ki", j.Q, q) + j.c
+            g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e
+            fixed = A.fixed
+            rows = [k for k, i in enumerate(j.v_index) if int(i) not in fixed]
+            vi, qi, li = j.v_index, j.q_index, j.lam_index
+            lamQ = np.einsum("k,kij->ij", lam, j.Q)
+            for key in ("A", "Am"):
+                M = full[key]
+                for r in rows:
+                    for cq in range(len(qi)):
+                        M[vi[r], qi[cq]] -= lamQ[r, cq]
+                    for k in range(len(li)):
+                        M[vi[r], li[k]] -= G[k, r]
+            Qv = np.einsum("kij,j->ki", j.Q, v)
+            for k in range(len(li)):
+                for c_ in range(len(vi)):
+                    full["A"][li[k], vi[c_]] -= G[k, c_]        # rate rows: G(q) v
+                for c_ in range(len(qi)):
+                    full["A"][li[k], qi[c_]] -= Qv[k, c_]
+                    full["Am"][li[k], qi[c_]] -= G[k, c_]       # position rows: g(q) - g_p
+            for r in rows:
+                f0[vi[r]] -= G[:, r] @ lam
+            f0[li] -= G @ v
+            self.joint_gap = max(getattr(self, "joint_gap", 0.0), float(np.max(np.abs(g))) if len(g) else 0.0)
 
     def groups(self):
         """{(field, component): indices into the retained dofs}."""
@@ -357,51 +435,61 @@ def _slepc(Am, Em, k, target):
 
 
 def mode_shapes(lin, vectors):
-    """Per mode: (s, reference positions[n, d], displacement[n, d]) of the centreline, the
-    displacement normalised to max |dr| = 1 (real: the phase of its largest entry removed)."""
-    model = lin.problem.model
-    pos = model.position
-    S = lin.problem.space
-    Vi, dofs = S.collapse(pos)
-    bs = Vi.dofmap.index_map_bs
-    nloc = Vi.dofmap.index_map.size_local
-    s = Vi.tabulate_dof_coordinates()[:nloc, 0]
-    order = np.argsort(s)
+    """Per flexible body: (name, s, reference positions[n, d], [displacement[n, d] per mode]) of the
+    centreline, each mode normalised to max |dr| = 1 over all bodies (real: the phase of its
+    largest entry removed)."""
     where = {int(d): i for i, d in enumerate(lin.free)}
-    ref = lin.X.x.array[np.asarray(dofs)].reshape(-1, bs)[:nloc][order]
+    bodies, raw = [], []
+    for k, part in enumerate(lin.parts):
+        body = part["body"]
+        if body.rigid:
+            continue
+        S, pos = body.space, body.model.position
+        Vi, dofs = S.collapse(pos)
+        bs = Vi.dofmap.index_map_bs
+        nloc = Vi.dofmap.index_map.size_local
+        s = Vi.tabulate_dof_coordinates()[:nloc, 0]
+        order = np.argsort(s)
+        dofs = np.asarray(dofs)
+        ref = part["X"].x.array[dofs].reshape(-1, bs)[:nloc][order]
+        rows = np.array([where.get(int(lin.offsets[k] + d), -1) for d in dofs])
+        disp = []
+        for m in range(vectors.shape[1]):
+            full = np.where(rows >= 0, vectors[np.maximum(rows, 0), m], 0.0)
+            disp.append(full.reshape(-1, bs)[:nloc][order])
+        bodies.append((part["name"], s[order], ref))
+        raw.append(disp)
     shapes = []
     for m in range(vectors.shape[1]):
-        v = vectors[:, m]
-        full = np.zeros(len(dofs), dtype=complex)
-        for k, d in enumerate(dofs):
-            i = where.get(int(d))
-            if i is not None:
-                full[k] = v[i]
-        dr = full.reshape(-1, bs)[:nloc][order]
-        big = dr.flat[np.argmax(np.abs(dr))]
-        dr = (dr / big).real if big != 0 else dr.real
-        shapes.append(dr / (np.max(np.abs(dr)) or 1.0))
-    return s[order], ref, shapes
+        allv = np.concatenate([r[m].ravel() for r in raw]) if raw else np.zeros(1)
+        big = allv[np.argmax(np.abs(allv))] if allv.size else 0
+        per = [(r[m] / big).real if big != 0 else r[m].real for r in raw]
+        scale = max((np.max(np.abs(x)) for x in per), default=1.0) or 1.0
+        shapes.append([x / scale for x in per])
+    return bodies, shapes
 
 
-def plot_modes(path, s, ref, shapes, omega, amplitude=None):
+def plot_modes(path, bodies, shapes, omega, amplitude=None):
+    """The first modes (one panel each): reference centrelines dashed, +- the mode shape."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     n = len(shapes)
-    L = float(s.max() - s.min()) or 1.0
+    refs = [b[2] for b in bodies]
+    every = np.concatenate(refs)
+    L = float(np.max(np.ptp(every, axis=0))) or 1.0
     a = amplitude or 0.1 * L
-    d = ref.shape[1]
-    # the plane of the picture: the two coordinates in which reference + modes vary most
-    spread = np.ptp(np.concatenate([ref] + [ref + a * x for x in shapes]), axis=0)
+    d = every.shape[1]
+    spread = np.ptp(np.concatenate([every] + [r + a * x for mode in shapes for r, x in zip(refs, mode)]), axis=0)
     ax2 = sorted(np.argsort(spread)[-2:]) if d > 2 else [0, 1]
     fig, axes = plt.subplots(1, max(n, 1), figsize=(3.2 * max(n, 1), 3.4), squeeze=False)
     for k in range(n):
         ax = axes[0, k]
-        ax.plot(ref[:, ax2[0]], ref[:, ax2[1]], "k--", lw=1)
-        for sign, style in ((1, "-"), (-1, ":")):
-            x = ref + sign * a * shapes[k]
-            ax.plot(x[:, ax2[0]], x[:, ax2[1]], style, color="C0", lw=1.5)
+        for b, (ref, x) in enumerate(zip(refs, shapes[k])):
+            ax.plot(ref[:, ax2[0]], ref[:, ax2[1]], "k--", lw=1)
+            for sign, style in ((1, "-"), (-1, ":")):
+                y = ref + sign * a * x
+                ax.plot(y[:, ax2[0]], y[:, ax2[1]], style, color=f"C{b}", lw=1.5)
         ax.set_title(f"mode {k + 1}: {omega[k] / (2 * np.pi):.4g} Hz")
         ax.set_aspect("equal", adjustable="datalim")
         ax.set_xlabel("xyz"[ax2[0]])
@@ -431,14 +519,12 @@ def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=
         scene = load(scene)
     p = scene.values(overrides)
     problem = scene.build(p, comm)
-    if isinstance(getattr(problem, "bodies", None), dict):
-        raise ParameterError(f"scene {scene.name} is a multibody system: linearize and modes take "
-                             "one-body scenes (systems are not supported yet)")
+    system = isinstance(getattr(problem, "bodies", None), dict)
     ref = None
     if about == "static":
         statics = Statics(problem)
         statics.solve(t, load_steps)
-        ref = statics.refs[""]
+        ref = statics.refs if system else statics.refs[""]
     else:
         for load in problem.loads:
             load.update(t)
@@ -480,7 +566,12 @@ def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, s
         with open(os.path.join(out, "modes.json"), "w") as fh:
             json.dump(info, fh, indent=2, default=float)
         if len(omega):
-            s, ref, shapes = mode_shapes(lin, vectors)
-            plot_modes(os.path.join(out, "modes.png"), s, ref, shapes[: min(len(shapes), 4)], omega)
-            np.savez(os.path.join(out, "mode_shapes.npz"), s=s, reference=ref, shapes=np.array(shapes), omega=omega)
+            bodies, shapes = mode_shapes(lin, vectors)
+            plot_modes(os.path.join(out, "modes.png"), bodies, shapes[: min(len(shapes), 4)], omega)
+            arrays = {"omega": omega, "damping_ratio": lin.damping}
+            for b, (name, s, ref) in enumerate(bodies):
+                key = name or "body"
+                arrays[f"{key}.s"], arrays[f"{key}.reference"] = s, ref
+                arrays[f"{key}.shapes"] = np.array([mode[b] for mode in shapes])
+            np.savez(os.path.join(out, "mode_shapes.npz"), **arrays)
     return omega, info

@@ -138,20 +138,36 @@ def test_cli_linearize_and_modes_write_files(tmp_path, rodfem):
     assert len((m / "modes.csv").read_text().splitlines()) == 4 and (m / "modes.png").stat().st_size > 1000
 
 
-@pytest.mark.parametrize("args, words", [
-    (["modes", "four-bar-2d"], ["multibody system", "one-body"]),
-    (["modes", "cantilever-2d", "--count", "0"], ["--count"]),
+@pytest.mark.parametrize("args, np_, words", [
+    (["modes", "cantilever-2d", "--count", "0"], None, ["--count"]),
+    pytest.param(["modes", "cantilever-2d"], 2, ["one process"], marks=pytest.mark.mpi),
 ])
-def test_bad_input_one_line(rodfem, args, words):
-    p = rodfem(*args)
+def test_bad_input_one_line(rodfem, args, np_, words):
+    p = rodfem(*args, np=np_)
     assert p.returncode == 2, p.stderr
-    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip() and not ln.startswith(("-", " ", "mpirun", "Primary", "a non-zero", "the job", "  "))]
     assert len(lines) == 1 and all(w in lines[0] for w in words), p.stderr
 
 
-def test_system_refused_by_the_api():
-    with pytest.raises(ParameterError):
-        Linearization(load("four-bar-2d").build(load("four-bar-2d").values(), MPI.COMM_WORLD))
+def test_system_of_two_welded_beams_has_the_modes_of_one_beam():
+    """A cantilever of two beams (4 + 4 elements) welded by a planar rigid joint: the joint's three
+    multipliers are states (E = 0 rows), the frequencies equal those of one beam of 8 elements."""
+    from rodfem import Support, System
+    from forms import joints
+    from forms.planar_beam import PlanarBeam, quadratic, straight
+    beam = PlanarBeam(0.785, 1e-9, quadratic(EA=2.1e7, GA=1e9, EI=175.0))
+    system = System()
+    a = system.add("a", beam, n_elements=4, supports=[Support("left", "clamped")], shape=straight((0, 0), (0.5, 0)))
+    b = system.add("b", beam, n_elements=4, shape=straight((0.5, 0), (1.0, 0)))
+    system.join(joints.planar_rigid, a.end, b.start, name="weld")
+    lin = Linearization(system)
+    w_sys, _, _ = natural_modes(lin, 3, "dense")
+    assert sum(1 for st in lin.states if st[0] == "joints.lambda") == 3
+    assert lin.checks["ph_residual"] <= 1e-12 and lin.checks["R_norm"] <= 1e-12
+    assert abs(lin.J + lin.J.T).max() <= 1e-14 * abs(lin.A).max()
+    _, _, one = prepare("cantilever-2d", {"n_elements": 8, **SLENDER})
+    w_one, _, _ = natural_modes(one, 3, "dense")
+    assert np.max(np.abs(w_sys / w_one - 1)) <= 1e-9, (w_sys, w_one)
 
 
 def test_viscoelastic_modes_follow_the_standard_linear_solid():
