@@ -347,14 +347,23 @@ def ph_form(lin):
     R = -0.5 * (JR + JR.T)
     EQ = (E.T @ Q).tocsr()
     nA = _norm(A) or 1.0
+    nA_max = abs(A).max() or 1.0
     checks = {"ph_residual": _norm(A - (J - R) @ Q) / nA,
               "EtQ_asymmetry": _norm(EQ - EQ.T) / (_norm(EQ) or 1.0),
               "R_norm": _norm(R) / nA,
               "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0),
               "rows_negated": sorted(set(negated))}
-    J.eliminate_zeros()
-    R.eliminate_zeros()
-    return J.tocsr(), R.tocsr(), Q, checks
+    J, R = (_clean(M, nA_max) for M in (J, R))
+    Q = _clean(Q, abs(Q).max() or 1.0)
+    return J, R, Q, checks
+
+
+def _clean(M, scale):
+    """M without the round-off entries (below 1e-15 of `scale`) left by the splitting."""
+    M = sp.csr_matrix(M, copy=True)
+    M.data[np.abs(M.data) < 1e-15 * scale] = 0.0
+    M.eliminate_zeros()
+    return M
 
 
 # -- natural modes ----------------------------------------------------------------------------
