@@ -106,7 +106,7 @@ def test_energy_balance_with_inputs():
     """Flying spaghetti (torsional variant): H_{n+1} - H_n = h y.u per step; H, L conserved after the load.
 
     Measured: balance 2.9e-14 max|H|, ptp of H after the load 3.8e-14 max|H|, of L_i 2.6e-14 |L|.
-    Bounds 1e-11 (round-off); a wrong input map or output (y at x_{n+1}) gives errors ~1e-3."""
+    Bounds 1e-11 (round-off); the port output y taken at x_{n+1} instead of x_{n+1/2} gives 2.2e-2."""
     P, p = build(flying_spaghetti_3d.scene, n_elements=4, dt=0.1, t_end=4.0, variant="spatial", Fz=2.0)
     rec = Recorder()
     res = run(P, p["dt"], p["t_end"], writer=rec)
@@ -148,7 +148,8 @@ def test_objectivity_under_a_superposed_rotation():
     times that of A.  Measured: 4e-16 (H), 6e-15 (N, M) and 3e-15 (vectors) of their scales; bound
     1e-12 (Newton stops at |F| <= 1e-10, but both runs take the same iterations).  Anisotropic
     compliances, so that a formulation with spatial stress resultants (R^T dropped from the strain
-    rate and R from the force: energy-consistent, not objective) differs by O(1) in N and H.
+    rate and R from the force: energy-consistent, not objective) fails: measured differences of
+    1.0 |N|, 0.2 |M| and 0.15 |r| (its H still agrees to 3e-12).
     """
     from rodfem import Problem
     from forms.cosserat_rod import RATES, CosseratRod
