@@ -11,7 +11,7 @@ this).  A mutation is caught when at least one of its tests fails; the table say
     .venv/bin/python benchmarks/mutations.py                  # all mutations, a few minutes
     .venv/bin/python benchmarks/mutations.py --only helix-ignores-constraint dg-no-taylor-term
     .venv/bin/python benchmarks/mutations.py --list
-    # which tests of another commit catch each mutation (whole suite per mutation, ~20 min):
+    # which tests of another commit catch each mutation (whole suite per mutation, ~1 hour):
     .venv/bin/python benchmarks/mutations.py --ref main --all-tests --out /tmp/mutations-main.md
 
 Writes benchmarks/mutations.md (or --out) and exits non-zero if any mutation survived, could not be

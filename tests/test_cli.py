@@ -48,7 +48,7 @@ def test_clamped_scene_has_no_momentum_columns(tmp_path):
     assert "tip_x" in h and "p_x" not in h and "L_z" not in h
 
 
-@pytest.mark.parametrize("args, words", [
+BAD_INPUT = [
     (["run", "no-such-scene"], ["unknown scene", "flying-spaghetti-2d"]),
     (["show", "no-such-scene"], ["unknown scene"]),
     (["run", "roll-up-2d", "--set", "nope=1"], ["unknown parameter 'nope'", "n_elements"]),
@@ -69,7 +69,10 @@ def test_clamped_scene_has_no_momentum_columns(tmp_path):
     # --set without '='
     (["run", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
     (["study", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
-])
+]
+
+
+@pytest.mark.parametrize("args, words", BAD_INPUT, ids=[":".join(a).replace(":--set:", ":") for a, _ in BAD_INPUT])
 def test_bad_input_is_one_line(args, words, capsys, tmp_path):
     """Every kind of bad input ends with exit code 2 and one line naming the parameter and what is allowed."""
     extra = {"run": ["--quiet", "--out", str(tmp_path / "x")], "study": ["--out", str(tmp_path / "x")]}
@@ -83,7 +86,7 @@ def test_bad_input_is_one_line(args, words, capsys, tmp_path):
 @pytest.mark.parametrize("setting, message", [
     ("EA=-1", "rodfem: error: parameter 'EA' must be a number > 0 (got -1)"),
     ("EA", "rodfem: error: --set expects NAME=VALUE (got 'EA')"),
-])
+], ids=["negative", "no-equals-sign"])
 def test_bad_input_from_the_shell_has_no_traceback(rodfem, tmp_path, setting, message):
     """From the shell: exit code 2 and exactly the one line on stderr, no traceback."""
     p = rodfem("run", "cantilever-2d", "--set", setting, "--out", str(tmp_path))

@@ -201,7 +201,8 @@ def test_objectivity_under_a_superposed_rotation():
 # -- zero compliances: inextensible, shear-rigid ------------------------------------------
 
 @pytest.mark.parametrize("zero, strain", [(("C_N1",), [0]), (("C_N2", "C_N3"), [1, 2]),
-                                          (("C_N1", "C_N2", "C_N3"), [0, 1, 2])])
+                                          (("C_N1", "C_N2", "C_N3"), [0, 1, 2])],
+                         ids=["inextensible", "shear-rigid", "kirchhoff"])
 def test_zero_compliance_constrains_strain(zero, strain):
     """C_N entries 0 in the whirling rod (centrifugal tension, so N != 0): the run converges, conserves
     energy (measured drift <= 1e-14 H_0), and the DG1 moments of those strains stay zero (<= 1e-12),
@@ -221,7 +222,8 @@ def test_zero_compliance_constrains_strain(zero, strain):
 
 
 @pytest.mark.parametrize("constraint, zero", [("none", []), ("inextensible", [0]), ("shear-rigid", [1, 2]),
-                                              ("kirchhoff", [0, 1, 2])])
+                                              ("kirchhoff", [0, 1, 2])],
+                         ids=["none", "inextensible", "shear-rigid", "kirchhoff"])
 def test_helix_constraint_parameter_zeroes_the_compliances(constraint, zero):
     """helix-3d's `constraint` switches off exactly the named strains (C_N entries 0), and only those.
 
