@@ -295,9 +295,12 @@ def write_table(results, path, title, command):
     lines = [f"# {title}", "", f"`{command}`", "",
              "| mutation | what it breaks | file | result | tests that caught it | time |",
              "|---|---|---|---|---|---|"]
+    def cell(text):
+        return text.replace("|", "\\|").replace("\n", " ")
     for m, r in results:
         caught = "<br>".join(short(t) for t in r["failed"]) or ("–" if r["status"] != "stale" else r["detail"])
-        lines.append(f"| `{m.name}` | {m.what} | `{m.file}` | **{r['status']}** | {caught} | {r['seconds']:.0f} s |")
+        lines.append(f"| `{m.name}` | {cell(m.what)} | `{m.file}` | **{r['status']}** | {cell(caught)} | "
+                     f"{r['seconds']:.0f} s |")
     n_caught = sum(r["status"] == "caught" for _, r in results)
     lines += ["", f"{n_caught} of {len(results)} mutations caught."]
     with open(path, "w") as f:
