@@ -103,7 +103,8 @@ MUTATIONS = [
       ["tests/test_cli.py::test_bad_input_is_one_line"],
       "the upper bound of a parameter range is not checked"),
     M("set-without-equals", "rodfem/cli.py",
-      [('        if "=" not in pair:\n            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")\n', "")],
+      [('        if "=" not in pair:\n'
+        '            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")\n', "")],
       ["tests/test_cli.py::test_bad_input_is_one_line",
        "tests/test_cli.py::test_bad_input_from_the_shell_has_no_traceback"],
       "`--set NAME` without '=' ends in a traceback"),
@@ -215,7 +216,8 @@ def preflight(copy):
     console = os.path.join(os.path.dirname(PYTHON), "rodfem")
     script = subprocess.run([console, "list"], cwd=copy, env=dict(env, PYTHONVERBOSE="1"), capture_output=True,
                             text=True, timeout=300)
-    cli = [line for line in script.stderr.splitlines() if line.startswith("# code object from") and "rodfem/cli.py" in line]
+    cli = [line for line in script.stderr.splitlines()
+           if line.startswith("# code object from") and "rodfem/cli.py" in line]
     mpirun = shutil.which("mpirun")
     mpi = subprocess.run(["timeout", "120", mpirun, "-n", "1", PYTHON, "-c", "import forms; print(forms.__file__)"],
                          cwd=copy, env=env, capture_output=True, text=True) if mpirun else None

@@ -159,7 +159,8 @@ def test_objectivity_under_a_superposed_rotation():
     def director_rate(i):   # w_i = Omega(s) x e_i with a spin varying along s: twist and bending rates
         return lambda x: np.cross(np.vstack([3 * x[0], 1 + 0 * x[0], -2 * np.cos(np.pi * x[0])]).T, E[i]).T
     initial = {"r": lambda x: np.vstack([x[0] - 0.5, 0 * x[0], 0 * x[0]]),
-               "v": lambda x: np.vstack([0.3 * np.cos(np.pi * x[0]), 2 * np.sin(np.pi * x[0]), -1.5 * (x[0] - 0.5) ** 2]),
+               "v": lambda x: np.vstack([0.3 * np.cos(np.pi * x[0]), 2 * np.sin(np.pi * x[0]),
+                                         -1.5 * (x[0] - 0.5) ** 2]),
                **{f"d{i + 1}": (lambda i: lambda x: np.outer(E[i], np.ones(x.shape[1])))(i) for i in range(3)},
                **{w: director_rate(i) for i, w in enumerate(RATES)}}
 
