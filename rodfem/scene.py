@@ -2,7 +2,7 @@
 
 A scene lists its `Parameter`s (default, unit, allowed range) and a
 `build(p, comm)` that returns a `Problem`.  Every scene has the common
-parameters n_elements, dt, t_end, integrator and frames.  Scenes are found
+parameters n_elements, dt, t_end, integrator, frames and section.  Scenes are found
 through the entry-point group ``rodfem.scenes`` (see pyproject.toml), so
 rodfem itself names no model.
 """
@@ -86,6 +86,8 @@ def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
         Parameter("frames", frames, "", "centreline frames written, evenly spaced with t = 0 and t_end "
                   "(1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
+                  "(height: half of it; 0: a 25th of the longest body)", low=0),
     ]
 
 
