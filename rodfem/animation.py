@@ -127,11 +127,6 @@ class Canvas:
                     artists[b][1].set_data(p[:, 0], p[:, 1]) if d == 2 else artists[b][1].set_data_3d(*p.T)
         return artists
 
-    def rgb(self, dpi):
-        self.fig.set_dpi(dpi)
-        self.fig.canvas.draw()
-        return np.asarray(self.fig.canvas.buffer_rgba())[:, :, :3].copy()
-
     def save(self, path, dpi=110):
         from .output import replace_atomically
         self.fig.tight_layout()
@@ -156,18 +151,33 @@ def plot_shapes(path, snapshots, dim, width, max_shapes=16):
     canvas.close()
 
 
-def write_animation(path, snapshots, dim, width, duration=6.0, dpi=64):
-    """animation.gif: one picture per frame (the frames of the .pvd), about `duration` seconds long."""
+def write_animation(path, snapshots, dim, width, duration=6.0, dpi=72):
+    """animation.gif: one picture per frame (the frames of the .pvd), about `duration` seconds long.
+    The axes are drawn once; each frame redraws only the bodies and the time on top of them (blitting)."""
     from PIL import Image
-    canvas = Canvas(snapshots, dim, width, f"t = {snapshots[0][0]:.6g}")
+    canvas = Canvas(snapshots, dim, width, " ")
+    fig, ax = canvas.fig, canvas.ax
+    fig.set_dpi(dpi)
     artists = canvas.draw(snapshots[0][1], "C0")
-    canvas.fig.set_dpi(dpi)
-    canvas.fig.tight_layout()
+    moving = [a for body in artists for a in body]
+    clock = fig.text(0.5, 0.97, "", ha="center", va="top")
+    for a in moving + [clock]:
+        a.set_animated(True)
+    fig.tight_layout()
+    fig.canvas.draw()
+    background = fig.canvas.copy_from_bbox(fig.bbox)
     images, palette = [], None
     for t, sketches in snapshots:
         canvas.draw(sketches, "C0", artists)
-        canvas.ax.set_title(f"t = {t:.6g}")
-        img = Image.fromarray(canvas.rgb(dpi))
+        clock.set_text(f"t = {t:.6g}")
+        fig.canvas.restore_region(background)
+        for a in moving:
+            if hasattr(a, "do_3d_projection"):     # a 3D collection is projected by the axes' draw only
+                a.do_3d_projection()
+            ax.draw_artist(a)
+        fig.draw_artist(clock)
+        rgba = fig.canvas.buffer_rgba()
+        img = Image.frombuffer("RGBA", rgba.shape[1::-1], rgba, "raw", "RGBA", 0, 1).convert("RGB")
         if palette is None:   # one palette for all frames (the colours do not change)
             palette = img.quantize(colors=32)
         images.append(img.quantize(palette=palette, dither=Image.Dither.NONE))

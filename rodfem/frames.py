@@ -7,7 +7,7 @@ centreline  one vtkPolyLine through the nodes in order of s (a rigid body: one v
             cells' values at a node between cells (where such a field jumps).
 surface     the section swept along the centreline (rodfem/sections.py), one ring per node (at
             most MAX_SEGMENTS segments per body: more nodes are thinned evenly), point data s and
-            the nodal state fields, cell data the derived fields of the segment, exact at its
+            the velocities, cell data the derived fields of the segment, exact at its
             midpoint (strains and stress resultants cell by cell, jumps included); a rigid body: its box.
 Planar models are drawn in the plane z = 0 (2-vectors get z = 0).
 """
@@ -17,7 +17,7 @@ from .sections import box, rotation_minimizing, section_points, stride, sweep
 from .snapshot import at_midpoints, at_nodes
 from .vtk import Array, PolyData
 
-MAX_SEGMENTS = 2000
+MAX_SEGMENTS = 1000
 FRAME_LABEL = "section frame {} (d1: the axis; d2 (width) and d3 (height) span the section)"
 
 
@@ -38,15 +38,17 @@ def _array(labels, name, values):
     return Array(values, comps)
 
 
-def point_arrays(state, labels, rings=None):
-    """{name: Array} of the nodal fields (and frame) of `state`, at the nodes `rings` (all by default)."""
+def point_arrays(state, labels, rings=None, keep=None):
+    """{name: Array} of the nodal fields (and frame) of `state`, at the nodes `rings` (all by default);
+    only s and the fields named in `keep`, if given."""
     pick = slice(None) if rings is None else rings
     out = {}
     if state.kind in ("rod", "line"):
         out["s"] = Array(state.s[pick])
     for name, vals in state.fields.items():
-        out[name] = _array(labels, name, vals[pick])
-    if state.directors is not None:
+        if keep is None or name in keep:
+            out[name] = _array(labels, name, vals[pick])
+    if state.directors is not None and keep is None:
         for i in range(3):
             name = f"d{i + 1}"
             if name not in out:
@@ -69,9 +71,10 @@ def centreline(state, labels):
     return poly
 
 
-def surface(state, labels, width, box_size):
+def surface(state, labels, width, box_size, keep=()):
     """The surface PolyData of a BodyState: a rod's section (width x width/2), a string's round tube
-    (diameter width/2), a rigid body's box of edges box_size(state.box, width)."""
+    (diameter width/2), a rigid body's box of edges box_size(state.box, width).  Point data: s and the
+    nodal fields named in `keep` (the velocities); cell data: the derived fields."""
     if state.kind in ("box", "point"):
         frame = state.directors[0] if state.directors is not None else np.eye(3)
         points, polys = box(state.position[0], frame, box_size(state.box, width))
@@ -89,7 +92,7 @@ def surface(state, labels, width, box_size):
     m = len(section)
     poly = PolyData(points=points, polys=polys)
     poly.point_data = {k: Array(np.repeat(a.values, m, axis=0), a.components)
-                       for k, a in point_arrays(state, labels, rings).items()}
+                       for k, a in point_arrays(state, labels, rings, keep).items()}
     # the segment of a surface segment [rings[j], rings[j+1]]: the node segment at its middle
     seg = (rings[:-1] + rings[1:] - 1) // 2
     order = np.repeat(seg, m)
@@ -101,7 +104,7 @@ def surface(state, labels, width, box_size):
     return poly
 
 
-def describe(state, labels, omitted):
+def describe(state, labels, omitted, keep=()):
     """What the files hold for this body: {file: {array: {"components", "description"}}} (fields.json)."""
     def entry(name, arr):
         what = labels.get(name, ("", ()))[0]
@@ -117,7 +120,7 @@ def describe(state, labels, omitted):
         nodal[k]["description"] += "; at a node between two cells the mean of their values"
     out = {"kind": state.kind, "centreline point data": nodal}
     if state.kind in ("rod", "line"):
-        out["surface point data"] = {k: v for k, v in nodal.items() if k not in derived}
+        out["surface point data"] = {k: v for k, v in nodal.items() if k == "s" or k in keep}
         out["surface cell data"] = {k: dict(nodal[k], description=labels.get(k, ("", ()))[0] +
                                             "; the value at the segment's midpoint") for k in derived}
     if omitted:

@@ -202,7 +202,8 @@ class RunWriter:
         names = []
         for view, state in zip(self.views, states):
             files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
-            polys = (centreline(state, view.labels), surface(state, view.labels, self.width, box_size))
+            polys = (centreline(state, view.labels),
+                     surface(state, view.labels, self.width, box_size, view.rates))
             for name, poly in zip(files, polys):
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
             names.append(files)
@@ -222,7 +223,8 @@ class RunWriter:
         fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
                               "string diameter": 0.5 * self.width},
                   "bodies": {view.name or "body": dict(model=type(view.model).__name__,
-                                                       **describe(state, view.labels, view.omitted))
+                                                       **describe(state, view.labels, view.omitted,
+                                                                  view.rates))
                              for view, state in zip(self.views, states)}}
         write_json(self.out.file("fields.json"), fields)
 

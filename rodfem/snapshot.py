@@ -60,6 +60,7 @@ class BodyView:
         self.omitted = sorted(rates & set(S.names)) if getattr(self.model, "massless", False) else []
         self.nodal = [f.name for f in S.fields if f.family == pos.family and f.degree == pos.degree
                       and f.name != pos.name and f.name not in self.omitted]
+        self.rates = [n for n in getattr(self.model, "kinematics", {}).values() if n in self.nodal]
         self.has_frame = hasattr(self.model, "directors")
         self.kind = ("box" if self.has_frame else "point") if body.rigid else ("rod" if self.has_frame else "line")
         self._outputs = None   # (fem.Expression, [(name, size)]), made at the first frame

@@ -125,10 +125,10 @@ def test_a_new_run_replaces_the_previous_runs_files(tmp_path):  # 6, frames
     out = tmp_path / "out"
     fs = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--quiet", "--out", str(out)]
     assert main([*fs, "--set", "t_end=3"]) == 0
-    assert len(list((out / "centreline").glob("*.vtu"))) == 31
+    assert len(list((out / "centreline").glob("*.vtp"))) == 31
     (out / "notes.txt").write_text("mine")
     assert main([*fs, "--set", "t_end=2", "--set", "frames=4"]) == 0
-    vtus = sorted((out / "centreline").glob("*.vtu"))
+    vtus = sorted((out / "centreline").glob("*.vtp"))
     times = [float(t) for t in re.findall(r'timestep="([^"]+)"', (out / "centreline.pvd").read_text())]
     assert len(vtus) == 4 and len(times) == 4 and times[0] == 0.0 and times[-1] == pytest.approx(2.0)
     assert len(history(out)) == 21 and summary(out)["parameters"]["t_end"] == 2.0
