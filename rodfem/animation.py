@@ -67,7 +67,7 @@ class Canvas:
         self.fig = plt.figure(figsize=size)
         self.ax = ax = self.fig.add_subplot(projection="3d" if dim == 3 else None)
         lo, hi, span = _extent(snapshots, dim)
-        self.half = max(0.5 * width, 0.015 * span)     # half the ribbon's width on the picture
+        self.half = max(0.5 * width, 0.025 * span)     # half the ribbon's width on the picture
         centre, pad = 0.5 * (lo + hi), 0.55 * span + self.half
         if dim == 3:   # equal scales on the three axes: a cube around the swept region
             for k, setter in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
@@ -93,8 +93,9 @@ class Canvas:
             self.ax.add_collection(c)
         return c
 
-    def draw(self, sketches, colour, artists=None, label=None, ribbons=True):
-        """Draw the bodies' sketches (new artists), or move `artists` made before to them."""
+    def draw(self, sketches, colour, artists=None, label=None, ribbons=True, rungs="C1"):
+        """Draw the bodies' sketches (new artists), or move `artists` made before to them; a rod's ribbon
+        in `colour`, its rungs in `rungs`."""
         d = self.dim
         new = artists is None
         artists = [] if new else artists
@@ -109,7 +110,7 @@ class Canvas:
                     lines = [self.ax.plot(*parts[0].T, "-", color=colour, lw=2.0, label=lab)[0]]
                     if len(parts) > 1:
                         lines += [self.ax.plot(*p.T, "-", color=colour, lw=0.6, alpha=0.7)[0] for p in parts[1:3]]
-                        lines.append(self.collection(parts[3], colors=[colour], linewidths=0.8, alpha=0.8))
+                        lines.append(self.collection(parts[3], colors=[rungs], linewidths=0.9, alpha=0.9))
                     artists.append(lines)
                 else:
                     for art, p in zip(artists[b][:3], parts[:3]):
@@ -151,7 +152,7 @@ def plot_shapes(path, snapshots, dim, width, max_shapes=16):
     canvas.close()
 
 
-def write_animation(path, snapshots, dim, width, duration=6.0, dpi=72):
+def write_animation(path, snapshots, dim, width, duration=6.0, dpi=80):
     """animation.gif: one picture per frame (the frames of the .pvd), about `duration` seconds long.
     The axes are drawn once; each frame redraws only the bodies and the time on top of them (blitting)."""
     from PIL import Image
