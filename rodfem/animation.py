@@ -93,9 +93,9 @@ class Canvas:
             self.ax.add_collection(c)
         return c
 
-    def draw(self, sketches, colour, artists=None, label=None, ribbons=True, rungs="C1"):
+    def draw(self, sketches, colour, artists=None, label=None, ribbons=True, rung_colour="C1"):
         """Draw the bodies' sketches (new artists), or move `artists` made before to them; a rod's ribbon
-        in `colour`, its rungs in `rungs`."""
+        in `colour`, its rungs in `rung_colour`."""
         d = self.dim
         new = artists is None
         artists = [] if new else artists
@@ -110,7 +110,7 @@ class Canvas:
                     lines = [self.ax.plot(*parts[0].T, "-", color=colour, lw=2.0, label=lab)[0]]
                     if len(parts) > 1:
                         lines += [self.ax.plot(*p.T, "-", color=colour, lw=0.6, alpha=0.7)[0] for p in parts[1:3]]
-                        lines.append(self.collection(parts[3], colors=[rungs], linewidths=0.9, alpha=0.9))
+                        lines.append(self.collection(parts[3], colors=[rung_colour], linewidths=0.9, alpha=0.9))
                     artists.append(lines)
                 else:
                     for art, p in zip(artists[b][:3], parts[:3]):

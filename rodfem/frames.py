@@ -2,7 +2,7 @@
 
 centreline  one vtkPolyLine through the nodes in order of s (a rigid body: one vertex), point data:
             s, the nodal state fields (velocities, directors, multipliers, ...), the section frame
-            d1, d2, d3 (also for the planar beam, from phi), and the model's derived fields
+            d1, d2, d3 (a planar model's d1, d2 from phi; its d3 is e_z), and the model's derived fields
             (strains, stress resultants) at the nodes: exact inside a cell, the mean of the two
             cells' values at a node between cells (where such a field jumps).
 surface     the section swept along the centreline (rodfem/sections.py), one ring per node (at
@@ -49,7 +49,7 @@ def point_arrays(state, labels, rings=None, keep=None):
         if keep is None or name in keep:
             out[name] = _array(labels, name, vals[pick])
     if state.directors is not None and keep is None:
-        for i in range(3):
+        for i in range(3 if state.dim == 3 else 2):       # (a planar model's d3 is e_z)
             name = f"d{i + 1}"
             if name not in out:
                 out[name] = Array(state.directors[pick, :, i], ("x", "y", "z"))

@@ -25,7 +25,8 @@ def sweep(centre, e2, e3, section, caps=True):
     """Points (rings * m, 3) and quads of `section` (m, 2) swept along `centre` (rings, 3) with section
     axes e2, e3 (rings, 3) at every ring; caps close both ends.  Returns (points, polys)."""
     n, m = len(centre), len(section)
-    points = centre[:, None, :] + section[None, :, 0, None] * e2[:, None, :] + section[None, :, 1, None] * e3[:, None, :]
+    a, b = section[None, :, 0, None], section[None, :, 1, None]
+    points = centre[:, None, :] + a * e2[:, None, :] + b * e3[:, None, :]
     i = np.arange(n - 1)[:, None] * m
     j = np.arange(m)[None, :]
     jn = (j + 1) % m

@@ -50,7 +50,8 @@ def scene_run(name, out, **overrides):
 
 def series(out, kind="centreline"):
     """[(t, part, PolyData, name)] of a .pvd."""
-    return [(t, part, read_vtp(os.path.join(out, f)), name) for t, part, f, name in read_pvd(os.path.join(out, kind + ".pvd"))]
+    return [(t, part, read_vtp(os.path.join(out, f)), name)
+            for t, part, f, name in read_pvd(os.path.join(out, kind + ".pvd"))]
 
 
 def gif_frames(path):
