@@ -9,6 +9,7 @@ The bytes depend on the values only: the same state gives the same file on any n
 import base64
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -38,10 +39,11 @@ class PolyData:
 
 def _encode(values):
     data = np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False).tobytes()
-    return base64.b64encode(np.uint64(len(data)).tobytes() + data).decode("ascii")
+    return base64.b64encode(np.uint64(len(data)).tobytes() + data)
 
 
-def _array(parent, name, arr, components=()):
+def _array(name, arr, components=(), indent=8):
+    """The bytes of one DataArray element."""
     values = np.asarray(arr)
     if values.dtype.kind == "f":
         values = values.astype(np.float64, copy=False)
@@ -53,34 +55,35 @@ def _array(parent, name, arr, components=()):
         attrs["Name"] = name
     for i, c in enumerate(components[:ncomp] if ncomp > 1 else ()):
         attrs[f"ComponentName{i}"] = str(c)
-    el = ET.SubElement(parent, "DataArray", attrs)
-    el.text = _encode(values)
-    return el
+    head = " ".join(f'{k}={quoteattr(v)}' for k, v in attrs.items())
+    return b" " * indent + f"<DataArray {head}>".encode() + _encode(values) + b"</DataArray>\n"
 
 
-def _cells(parent, tag, cells):
-    el = ET.SubElement(parent, tag)
+def _cells(tag, cells):
     sizes = np.array([len(c) for c in cells], dtype=np.int64)
     conn = np.concatenate(cells).astype(np.int64) if cells else np.zeros(0, np.int64)
-    _array(el, "connectivity", conn)
-    _array(el, "offsets", np.cumsum(sizes))
+    return (f"      <{tag}>\n".encode() + _array("connectivity", conn) + _array("offsets", np.cumsum(sizes))
+            + f"      </{tag}>\n".encode())
 
 
 def write_vtp(path, poly):
     """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
-    root = ET.Element("VTKFile", type="PolyData", version="1.0", byte_order="LittleEndian", header_type="UInt64")
-    piece = ET.SubElement(ET.SubElement(root, "PolyData"), "Piece", NumberOfPoints=str(len(poly.points)),
-                          NumberOfVerts=str(len(poly.verts)), NumberOfLines=str(len(poly.lines)),
-                          NumberOfStrips="0", NumberOfPolys=str(len(poly.polys)))
+    parts = [b'<?xml version="1.0" encoding="utf-8"?>\n'
+             b'<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
+             b"  <PolyData>\n",
+             f'    <Piece NumberOfPoints="{len(poly.points)}" NumberOfVerts="{len(poly.verts)}" '
+             f'NumberOfLines="{len(poly.lines)}" NumberOfStrips="0" NumberOfPolys="{len(poly.polys)}">\n'.encode()]
     for tag, data in (("PointData", poly.point_data), ("CellData", poly.cell_data)):
-        el = ET.SubElement(piece, tag)
-        for name, a in data.items():
-            _array(el, name, a.values, a.components)
-    _array(ET.SubElement(piece, "Points"), "", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3))
-    for tag, cells in (("Verts", poly.verts), ("Lines", poly.lines), ("Strips", []), ("Polys", poly.polys)):
-        _cells(piece, tag, cells)
-    ET.indent(root) if hasattr(ET, "indent") else None
-    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+        parts.append(f"      <{tag}>\n".encode())
+        parts += [_array(name, a.values, a.components) for name, a in data.items()]
+        parts.append(f"      </{tag}>\n".encode())
+    parts += [b"      <Points>\n", _array("", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3)),
+              b"      </Points>\n"]
+    parts += [_cells(tag, cells) for tag, cells in (("Verts", poly.verts), ("Lines", poly.lines), ("Strips", []),
+                                                    ("Polys", poly.polys))]
+    parts.append(b"    </Piece>\n  </PolyData>\n</VTKFile>\n")
+    with open(path, "wb") as f:
+        f.write(b"".join(parts))
 
 
 def write_pvd(path, datasets):
