@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from dolfinx import fem
 
+from . import compat
 from .jitcache import locked
 
 
@@ -86,6 +87,7 @@ class BodyView:
                 parts += comps
                 names.append((name, len(comps)))
             points = np.linspace(0.0, 1.0, 2 * self.degree + 1)[:, None]
+            compat.settle_coordinate_element(body.mesh)   # the same cache key in a cold and a warm run
             with locked(body.comm):
                 expr = fem.Expression(ufl.as_vector(parts), points)
             self._outputs = (expr, names)
