@@ -144,7 +144,8 @@ def test_frames_one_is_the_end_state(tmp_path):
 def test_a_full_disk_is_one_line_and_keeps_a_summary(tmp_path):  # 9: writes fail as on a full disk
     out = tmp_path / "out"
     code = ("import resource, sys\nfrom rodfem.cli import main\n"
-            "resource.setrlimit(resource.RLIMIT_FSIZE, (6000, 6000))\n"  # after MPI_Init: files of at most 6 kB
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (12000, 12000))\n"  # after MPI_Init: files of at most
+            # 12 kB (history.csv reaches it first; a frame of 4 elements is 4 to 6 kB)
             f"sys.exit(main({['run', *LONG, '--set', 't_end=10', '--out', str(out)]!r}))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=120)
     assert p.returncode == 2
