@@ -80,6 +80,15 @@ def planar_frame(q, position, offset=()):
     return Frame(x=x, phi=phi)
 
 
+def planar_directors(phi):
+    """The section frame [d1 d2 d3] (n, 3, 3) of angles phi (n,) in 3D: the plane is z = 0, d3 = e_z
+    (numbers; for pictures, rodfem/snapshot.py)."""
+    c, s = np.cos(phi), np.sin(phi)
+    R = np.zeros((len(phi), 3, 3))
+    R[:, 0, 0], R[:, 1, 0], R[:, 0, 1], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R
+
+
 def cross(a, b):
     """Planar cross product a x b = a^T S^T b = a_0 b_1 - a_1 b_0."""
     return a[0] * b[1] - a[1] * b[0]
@@ -147,6 +156,15 @@ class PlanarBeam:
     position = "r"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {"phi": ("section angle phi (rad, unwrapped): d1 = (cos phi, sin phi)", ()),
+              "v": ("velocity d_t r of the centreline", ("x", "y")),
+              "omega": ("angular velocity d_t phi of the section", ()),
+              "Gamma": ("strains Gamma = A(phi)^T d_s r - e1 in the section frame (the state's field)",
+                        ("axial", "shear")),
+              "kappa": ("curvature kappa = d_s phi (the state's field)", ()),
+              "N": ("stress resultants N = dW/dGamma in the section frame: axial and shear force", ("axial", "shear")),
+              "M": ("bending moment M = dW/dkappa", ())}
 
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
 
@@ -226,6 +244,22 @@ class PlanarBeam:
         d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
                 for Nj, Mj, R in self._branch_efforts(step, dx.ufl_domain()))
         return step.h * d * dx
+
+    @property
+    def massless(self):
+        """No inertia (rhoA = rhoI = 0): statics through the integrator, the velocities mean nothing."""
+        return all(isinstance(v, numbers.Real) and v == 0 for v in self.densities.values.values())
+
+    @staticmethod
+    def directors(q):
+        """The section frame (n, 3, 3) at nodal values q (numbers, for pictures)."""
+        return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
+
+    def outputs(self, x):
+        """The strains (the state's) and the stress resultants N = dW/dGamma, M = dW/dkappa (UFL)."""
+        G, k = ufl.variable(x["Gamma"]), ufl.variable(x["kappa"])
+        W = self.energy(G, k)
+        return {"Gamma": x["Gamma"], "kappa": x["kappa"], "N": ufl.diff(W, G), "M": ufl.diff(W, k)}
 
     def compatible_strains(self, x):
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""

@@ -35,7 +35,8 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
                "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
     with outdir.claimed(started) if outdir else nullcontext():
         problem = build(scene, p, comm, outdir, started)
-        writer = RunWriter(outdir, problem, n_steps, p.get("frames", 100)) if outdir else None
+        writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0))
+                  if outdir else None)
         result = Result()
         try:
             run(problem, p["dt"], p["t_end"], writer=writer, progress=progress, result=result)

@@ -38,7 +38,7 @@ def test_run_writes_results(tmp_path):
     assert s["steps"] == 30 and s["dofs"] == 11 * 6 + 10 * 3
     assert s["dolfinx_version"].startswith("0.")
     assert s["max_balance_error_relative"] <= 1e-11   # measured 1.1e-15
-    assert (out / "centreline.pvd").exists() and len(list((out / "centreline").glob("*.vtu"))) == 31
+    assert (out / "centreline.pvd").exists() and len(list((out / "centreline").glob("*.vtp"))) == 31
     assert (out / "shapes.png").stat().st_size > 1000 and (out / "energy.png").stat().st_size > 1000
 
 
