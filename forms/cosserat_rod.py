@@ -138,6 +138,11 @@ def constraint_rate(d, w):
     return ufl.as_vector([ufl.inner(d[i], w[j]) + ufl.inner(d[j], w[i]) for i, j in PAIRS])
 
 
+def orthonormality(d):
+    """g_ij = d_i . d_j - delta_ij for the 6 pairs i <= j (position level; its rate is constraint_rate)."""
+    return ufl.as_vector([ufl.inner(d[i], d[j]) - (1.0 if i == j else 0.0) for i, j in PAIRS])
+
+
 def angular_velocity(d, w):
     """omega = 1/2 sum_i d_i x w_i (= omega if w_i = omega x d_i, d orthonormal)."""
     return 0.5 * sum((ufl.cross(d[i], w[i]) for i in range(3)), ufl.zero(3))
@@ -344,6 +349,25 @@ class CosseratRod:
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""
         return {}
+
+    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # At rest the compliance rows and the velocity-level constraint rows are empty; these
+    # total-form rows replace them (the rows tested with `static_fields`):
+    #     C_N (N - N_ref) = Pi(Gamma(q) - Gamma(q_ref)),   C_M (M - M_ref) = Pi(K(q) - K(q_ref)),
+    #     d_i . d_j - delta_ij = 0 at the nodes (GLL),
+    # with q_ref the reference state (the body's initial state).  They are exactly the
+    # invariants the rate form keeps (module docstring): a static solution is a rest
+    # state of the time stepping.
+    static_fields = ("N", "M", "lam")
+
+    def static_rows(self, x, ref, test, dx, ds):
+        _, _, C_N, C_M = self._constants(dx.ufl_domain())
+        d, d0 = [x[n] for n in DIRECTORS], [ref[n] for n in DIRECTORS]
+        gamma = shear_strain(x["r"], d) - shear_strain(ref["r"], d0)
+        kappa = curvature(d) - curvature(d0)
+        F = (ufl.inner(C_N * (x["N"] - ref["N"]) - gamma, test["N"])
+             + ufl.inner(C_M * (x["M"] - ref["M"]) - kappa, test["M"])) * dx
+        return F + ufl.inner(orthonormality(d), test["lam"]) * gll(dx)
 
     def momentum(self, x):
         """p = rhoA v and L = rhoA phi x v + sum_i m_i d_i x w_i (densities; L about the origin)."""

@@ -265,6 +265,18 @@ class PlanarBeam:
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""
         return {"Gamma": rotation(x["phi"]).T * x["r"].dx(0) - E1, "kappa": x["phi"].dx(0)}
 
+    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # At rest the strain rows above are empty (their rates and the velocities vanish):
+    # the strains are then fixed by these total-form rows, which replace the rows
+    # tested with `static_fields`.  Gamma = Pi(A^T r' - e1), kappa = Pi(phi') (Pi: the
+    # L2 projection on DG_{k-1}); the reference curvature kappa0 is in the material.
+    static_fields = ("Gamma", "kappa")
+
+    def static_rows(self, x, ref, test, dx, ds):
+        """(Gamma - (A^T r' - e1)) . dGamma + (kappa - phi') dkappa  (`ref` unused: absolute strains)."""
+        c = self.compatible_strains(x)
+        return (ufl.inner(x["Gamma"] - c["Gamma"], test["Gamma"]) + (x["kappa"] - c["kappa"]) * test["kappa"]) * dx
+
     def momentum(self, x):
         """Linear momentum p = rhoA v and angular momentum L_z = rhoA r x v + rhoI omega (densities)."""
         c = self.densities.on(ufl.domain.extract_unique_domain(x["v"]))

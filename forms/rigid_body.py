@@ -30,7 +30,7 @@ from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
-from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses
+from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
 from forms.planar_beam import planar_directors, planar_frame
 
 
@@ -61,6 +61,11 @@ class PointMass:
 
     def compatible_strains(self, x):
         return {}
+
+    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return None
 
     def momentum(self, x):
         m = self.parameters.on(ufl.domain.extract_unique_domain(x["v"]))["m"]
@@ -119,6 +124,11 @@ class PlanarRigidBody:
 
     def compatible_strains(self, x):
         return {}
+
+    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return None
 
     def momentum(self, x):
         c = self.parameters.on(ufl.domain.extract_unique_domain(x["v"]))
@@ -203,6 +213,12 @@ class RigidBody:
 
     def compatible_strains(self, x):
         return {}
+
+    # statics and modes (rodfem/statics.py): d_i . d_j - delta_ij = 0 replaces the velocity-level row
+    static_fields = ("lam",)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return ufl.inner(orthonormality([x[n] for n in DIRECTORS]), test["lam"]) * dx
 
     def momentum(self, x):
         """p = m v, L = x x m v + sum_i E_i d_i x w_i (about the origin)."""

@@ -196,6 +196,13 @@ class String:
         relaxed = {f"C_{k}": _ones for k in range(1, len(self.branches) + 1)}
         return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0)), **relaxed}
 
+    # statics and modes (rodfem/statics.py): the total-form row C = |d_s r|^2 replaces the rate row of C
+    static_fields = ("C",)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        """(C - d_s r . d_s r) dC  (`ref` unused: C is absolute)."""
+        return (x["C"] - ufl.inner(x["r"].dx(0), x["r"].dx(0))) * test["C"] * dx
+
     def momentum(self, x):
         """p = rhoA v and L = r x rhoA v (densities); empty with end masses (they are point masses)."""
         if any(m > 0 for m in self.end_masses.values()):

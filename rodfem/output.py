@@ -45,7 +45,8 @@ from .vtk import write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
-             "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp")
+             "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
+             "checkpoint.npz", "checkpoint.npz.tmp*")
 LOCK_FILE = ".rodfem.lock"
 
 
@@ -111,14 +112,16 @@ class OutDir:
                     raise InputError(f"--out {self.path!r}: cannot {what} ({e.strerror or e}){hint}") from None
 
     @contextmanager
-    def claimed(self, summary):
-        """Lock the directory, clear a previous run's files, write summary.json (status "running");
+    def claimed(self, summary, clear=True):
+        """Lock the directory, clear a previous run's files (not when `clear` is false: a run resumed
+        from its checkpoint, rodfem/checkpoint.py), write summary.json (status "running");
         release the lock at the end of the block."""
         self.do("create the directory", os.makedirs, os.path.join(self.path, "centreline"), 0o777, True,
                 hint="; --out must name a directory that can be created and written")
         try:
             self.do("lock the directory", self._take_lock)
-            self.do("remove the previous run's files", self._clear)
+            if clear:
+                self.do("remove the previous run's files", self._clear)
             self.do("write summary.json", write_json, self.file("summary.json"), summary)
             yield self
         finally:
