@@ -210,6 +210,20 @@ class CosseratRod:
     frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
     flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {**{d: (f"director {d} (d1 the axis, d2 and d3 span the section)", ("x", "y", "z")) for d in DIRECTORS},
+              "v": ("velocity d_t r of the centreline", ("x", "y", "z")),
+              **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
+              "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij "
+                      "(reactions to them)", tuple(f"{i + 1}{j + 1}" for i, j in PAIRS)),
+              "Gamma": ("strains Gamma_i = d_i . d_s r - delta_i1 of the configuration "
+                        "(C_N N = Gamma - Gamma at rest)", ("axial", "shear2", "shear3")),
+              "K": ("curvatures K_i = 1/2 eps_ijk d_s d_j . d_k of the configuration: torsion, bending "
+                    "about d2, d3 (C_M M = K - K at rest)", ("torsion", "bend2", "bend3")),
+              "N": ("stress resultants N on (d1, d2, d3): axial and shear forces (the state's field)",
+                    ("axial", "shear2", "shear3")),
+              "M": ("moments M on (d1, d2, d3): torsion and bending moments (the state's field)",
+                    ("torsion", "bend2", "bend3"))}
 
     def __init__(self, rhoA, rhoJ, C_N, C_M, branches=()):
         self.rhoA = float(rhoA)
@@ -309,6 +323,28 @@ class CosseratRod:
         terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
                  for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
         return step.h * sum(terms[1:], terms[0]) * dx
+
+    @property
+    def massless(self):
+        """No inertia (rhoA = 0 and rhoJ = 0): statics through the integrator, the velocities mean nothing."""
+        return self.rhoA == 0 and not np.any(self.masses)
+
+    @staticmethod
+    def directors(q):
+        """The section frame (n, 3, 3), columns d1, d2, d3, at nodal values q (numbers, for pictures)."""
+        return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
+
+    def outputs(self, x):
+        """Strains Gamma, K of the configuration and the stress resultants N, M (UFL): the equilibrium
+        branch's plus every Maxwell branch's (parallel branches: the stresses add)."""
+        d = [x[n] for n in DIRECTORS]
+        N, M = x["N"], x["M"]
+        for field in (f.name for f in self.fields):
+            if field.startswith("N_"):
+                N = N + x[field]
+            elif field.startswith("M_"):
+                M = M + x[field]
+        return {"Gamma": shear_strain(x["r"], d) - ufl.as_vector([1.0, 0.0, 0.0]), "K": curvature(d), "N": N, "M": M}
 
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""

@@ -23,7 +23,16 @@ spinning beam build up strain; tests/test_planar_beam.py catches that.)
 Weak form: (r, phi, v, omega) in P_k, (Gamma, kappa) in DG_{k-1}; the balance
 rows are integrated by parts (the end terms are the ports), the strain rows
 are tested with DG_{k-1}.  Testing with (v_m, omega_m, N, M) gives
-H_{n+1} - H_n = h y.u exactly.
+H_{n+1} - H_n = h y.u exactly -- provided (N, M) lie in the test space
+DG_{k-1}.  For k = 1 they do: the pointwise discrete gradient of cellwise
+constant strains is cellwise constant.  For k >= 2 the discrete gradient of a
+non-quadratic W is not a polynomial (the balance error of log_axial at k = 2
+was 8e-8 of max|H|), so there N, M are extra DG_{k-1} fields, the L2
+projection of the effort with the quadrature rule of H: the strain increment
+is in DG_{k-1}, so int N.(Gamma_{n+1} - Gamma_n) = int grad_bar W.(Gamma_{n+1}
+- Gamma_n) = int W_{n+1} - W_n (Gonzalez, point by point), and the balance is exact again.
+(The efforts of Maxwell branches are not projected: at k >= 2 a non-quadratic
+branch law keeps an O(h^3) balance error per step.)
 
 Viscoelasticity (generalized Maxwell, forms/viscoelastic.py): `branches` =
 [maxwell(tau_j, EA_j, GA_j, EI_j), ...] adds per branch j its elastic strains
@@ -69,6 +78,15 @@ def planar_frame(q, position, offset=()):
         c, s = np.cos(phi), np.sin(phi)
         x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
     return Frame(x=x, phi=phi)
+
+
+def planar_directors(phi):
+    """The section frame [d1 d2 d3] (n, 3, 3) of angles phi (n,) in 3D: the plane is z = 0, d3 = e_z
+    (numbers; for pictures, rodfem/snapshot.py)."""
+    c, s = np.cos(phi), np.sin(phi)
+    R = np.zeros((len(phi), 3, 3))
+    R[:, 0, 0], R[:, 1, 0], R[:, 0, 1], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R
 
 
 def cross(a, b):
@@ -138,6 +156,15 @@ class PlanarBeam:
     position = "r"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {"phi": ("section angle phi (rad, unwrapped): d1 = (cos phi, sin phi)", ()),
+              "v": ("velocity d_t r of the centreline", ("x", "y")),
+              "omega": ("angular velocity d_t phi of the section", ()),
+              "Gamma": ("strains Gamma = A(phi)^T d_s r - e1 in the section frame (the state's field)",
+                        ("axial", "shear")),
+              "kappa": ("curvature kappa = d_s phi (the state's field)", ()),
+              "N": ("stress resultants N = dW/dGamma in the section frame: axial and shear force", ("axial", "shear")),
+              "M": ("bending moment M = dW/dkappa", ())}
 
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
 
@@ -155,6 +182,8 @@ class PlanarBeam:
         k = degree
         self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
+        if k >= 2:  # the efforts, projected on DG_{k-1} (module docstring); algebraic: only x_{n+1} is used
+            self.fields += [Field("N", "DG", k - 1, (2,)), Field("M", "DG", k - 1)]
         # Maxwell branches with stiffness: their elastic strains are internal variables
         self.branches = active(branches)
         for j in range(1, len(self.branches) + 1):
@@ -184,16 +213,21 @@ class PlanarBeam:
         r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")
         A = rotation(step.mid("phi"))
         N, M = step.effort(self.energy, ["Gamma", "kappa"])
+        projection = 0
+        if self.degree >= 2:
+            Nh, Mh = step.x1["N"], step.x1["M"]
+            projection = (ufl.inner(Nh - N, test["N"]) + (Mh - M) * test["M"]) * dx
+            N, M = Nh, Mh
         branches = self._branch_efforts(step, dx.ufl_domain())
         for Nj, Mj, _ in branches:   # parallel branches: the stresses add
             N, M = N + Nj, M + Mj
         n = A * N
         c = self.densities.on(dx.ufl_domain())
-        F = (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
-             + c["rhoA"] * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
-             + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
-             + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
-             + (step.rate("kappa") - w.dx(0)) * dk) * dx
+        F = projection + (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
+                          + c["rhoA"] * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
+                          + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
+                          + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
+                          + (step.rate("kappa") - w.dx(0)) * dk) * dx
         for j, ((Nj, Mj, R), b) in enumerate(zip(branches, self.branches), 1):
             # d_t e_j = (kinematic strain rate) - R_j sigma_j, scaled by tau_j/(tau_j + h)
             G, kap = f"Gamma_{j}", f"kappa_{j}"
@@ -210,6 +244,22 @@ class PlanarBeam:
         d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
                 for Nj, Mj, R in self._branch_efforts(step, dx.ufl_domain()))
         return step.h * d * dx
+
+    @property
+    def massless(self):
+        """No inertia (rhoA = rhoI = 0): statics through the integrator, the velocities mean nothing."""
+        return all(isinstance(v, numbers.Real) and v == 0 for v in self.densities.values.values())
+
+    @staticmethod
+    def directors(q):
+        """The section frame (n, 3, 3) at nodal values q (numbers, for pictures)."""
+        return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
+
+    def outputs(self, x):
+        """The strains (the state's) and the stress resultants N = dW/dGamma, M = dW/dkappa (UFL)."""
+        G, k = ufl.variable(x["Gamma"]), ufl.variable(x["kappa"])
+        W = self.energy(G, k)
+        return {"Gamma": x["Gamma"], "kappa": x["kappa"], "N": ufl.diff(W, G), "M": ufl.diff(W, k)}
 
     def compatible_strains(self, x):
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""

@@ -31,7 +31,7 @@ from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
 from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
-from forms.planar_beam import planar_frame
+from forms.planar_beam import planar_directors, planar_frame
 
 
 class PointMass:
@@ -40,6 +40,7 @@ class PointMass:
     position = "x"
     flows = {"force": "v"}
     kinematics = {"x": "v"}
+    labels = {"v": ("velocity of the point mass", ("x", "y", "z"))}
     supports = {}
     quadrature_degree = 0
 
@@ -99,6 +100,8 @@ class PlanarRigidBody:
     position = "x"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"x": "v", "phi": "omega"}
+    labels = {"phi": ("angle of the body (rad)", ()), "v": ("velocity of the centre of mass", ("x", "y")),
+              "omega": ("angular velocity d_t phi", ())}
     supports = {}
     quadrature_degree = 0
 
@@ -132,6 +135,16 @@ class PlanarRigidBody:
         p = c["m"] * x["v"]
         return {"p_x": p[0], "p_y": p[1], "L_z": x["x"][0] * p[1] - x["x"][1] * p[0] + c["J"] * x["omega"]}
 
+    @staticmethod
+    def directors(q):
+        """The body frame (n, 3, 3) at the angle q["phi"] (numbers, for pictures; the plane is z = 0)."""
+        return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
+
+    def box(self):
+        """The square plate of the same mass and inertia, edges (a, a, 0): J = m a^2 / 6 (pictures)."""
+        a = float(np.sqrt(6 * self.parameters.values["J"] / self.parameters.values["m"]))
+        return (a, a, 0.0)
+
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "x", offset))
 
     @staticmethod
@@ -146,6 +159,11 @@ class RigidBody:
     position = "x"
     flows = {"force": "v", "moment": "w1"}    # a moment needs a pairing (cosserat_rod.spatial_moment)
     kinematics = {"x": "v", "d1": "w1", "d2": "w2", "d3": "w3"}
+    labels = {**{d: (f"director {d} (principal axis of inertia)", ("x", "y", "z")) for d in DIRECTORS},
+              "v": ("velocity of the centre of mass", ("x", "y", "z")),
+              **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
+              "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij",
+                      ("11", "22", "33", "12", "13", "23"))}
     supports = {}
     quadrature_degree = 0
     frame = staticmethod(lambda q, offset=(): director_frame(q, "x", offset))
@@ -182,6 +200,16 @@ class RigidBody:
                  for dn, wn, wi, e, dwi in zip(DIRECTORS, RATES, w, E, dw))
         F += ufl.inner(lam, constraint_rate(d, dw)) + ufl.inner(constraint_rate(d, w), test["lam"])
         return F * dx
+
+    @staticmethod
+    def directors(q):
+        """The body frame (n, 3, 3), columns d1, d2, d3 (numbers, for pictures)."""
+        return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
+
+    def box(self):
+        """Edges (a1, a2, a3) of the uniform box of the same mass and principal inertia (pictures):
+        J_1 = m (a2^2 + a3^2) / 12, ..., i.e. a_k^2 = 12 E_k / m with the director masses E_k."""
+        return tuple(float(np.sqrt(12 * e / self.parameters.values["m"])) for e in self.E)
 
     def compatible_strains(self, x):
         return {}

@@ -110,6 +110,11 @@ class String:
         return Frame(x=np.asarray(q["r"], dtype=float))
     fields = [Field("r", "P", 1, (3,)), Field("v", "P", 1, (3,)), Field("C", "DG", 0)]
     quadrature_degree = 2   # exact for every term: rhoA v.dv is quadratic, the rest cellwise constant
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {"v": ("velocity d_t r", ("x", "y", "z")),
+              "C": ("strain C = d_s r . d_s r (the state's field)", ()),
+              "stretch": ("stretch sqrt(C) = |d_s r|", ()),
+              "tension": ("tension N = 2 W'(C) sqrt(C) = |contact force|", ())}
 
     def __init__(self, material, rhoA, end_masses=None, branches=()):
         if not isinstance(material, Material):
@@ -205,6 +210,10 @@ class String:
         p = self.rhoA * x["v"]
         Lm = ufl.cross(x["r"], p)
         return {"p_x": p[0], "p_y": p[1], "p_z": p[2], "L_x": Lm[0], "L_y": Lm[1], "L_z": Lm[2]}
+
+    def outputs(self, x):
+        """The strain C (the state's), the stretch and the tension (UFL)."""
+        return {"C": x["C"], "stretch": ufl.sqrt(x["C"]), "tension": self.tension(x["C"])}
 
     def tension(self, C):
         """N = 2 W'(C) sqrt(C) (UFL)."""

@@ -392,13 +392,14 @@ def _truncate(out, step):
     return [{k: (int(float(v)) if k == "newton_its" else float(v)) for k, v in r.items()} for r in rows]
 
 
-def writer_for(outdir, problem, n_steps, frames, step, t):
-    """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint."""
-    from .output import RunWriter, bodies_of
+def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
+    """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint
+    (shapes.png and the animation then show the frames written after the restart)."""
+    from .output import RunWriter
 
     class ResumedWriter(RunWriter):
         def __init__(self):
-            super().__init__(outdir, problem, n_steps, frames)
+            super().__init__(outdir, problem, n_steps, frames, section)
             self.count = step + 1
             if problem.comm.rank != 0:
                 return
@@ -407,19 +408,17 @@ def writer_for(outdir, problem, n_steps, frames, step, t):
                 header = next(csv.reader(f))
             self._file = open(path, "a", newline="")
             self._csv = csv.DictWriter(self._file, fieldnames=header)
+            fields = outdir.file("fields.json")
+            if os.path.isfile(fields):
+                with open(fields) as f:
+                    self.width = json.load(f)["section"]["width (along d2)"]
             pvd = outdir.file("centreline.pvd")
-            if os.path.isfile(pvd):
-                import meshio
-                dims = [b.space.field(b.model.position).size for _, b in bodies_of(problem)]
+            if os.path.isfile(pvd) and self.width is not None:
+                kept = {}
                 for ds in ET.parse(pvd).getroot().iter("DataSet"):
                     tf = float(ds.get("timestep"))
                     if tf <= t * (1 + 1e-12) + 1e-300:
                         name = ds.get("file")
-                        self.frames.append((tf, name))
-                        try:
-                            mesh = meshio.read(outdir.file(name))
-                            body = np.asarray(mesh.point_data["body"]).astype(int)
-                            self.snapshots.append((tf, [mesh.points[body == k][:, :d] for k, d in enumerate(dims)]))
-                        except Exception:  # noqa: BLE001  (a frame that cannot be read is left out of shapes.png)
-                            pass
+                        kept.setdefault(tf, []).append((name, name.replace("centreline/", "surface/", 1)))
+                self.frames = sorted(kept.items())
     return ResumedWriter()

@@ -81,7 +81,8 @@ def cmd_run(args):
         f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
         f"max |{balance}| = {summary['max_balance_error']:.2e} "
         f"({summary['max_balance_error_relative']:.1e} of max |H|)")
-    say(f"results in {out}/: history.csv, summary.json, centreline.pvd (ParaView), shapes.png, energy.png")
+    say(f"results in {out}/: history.csv, summary.json, centreline.pvd and surface.pvd (ParaView), "
+        f"fields.json, animation.gif, shapes.png, energy.png")
 
 
 def cmd_study(args):

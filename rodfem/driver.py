@@ -57,10 +57,12 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         if start and outdir:
             rows = checkpoint.truncate_history(outdir, start.step)
             result = Result(rows=rows, steps=start.step)
-            writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t)
+            writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t,
+                                           p.get("section", 0.0))
         else:
             result = Result(steps=start.step if start else 0)
-            writer = RunWriter(outdir, problem, n_steps, p.get("frames", 100)) if outdir else None
+            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0))
+                      if outdir else None)
         saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
         try:
             if not (start and start.step == n_steps):   # a checkpoint at t_end: nothing left to run

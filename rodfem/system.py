@@ -522,12 +522,12 @@ class BlockAssembler:
         return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
 
     def _pick(self, vals, idx):
-        """vals at the global indices idx (positions looked up once per index array)."""
-        key = id(idx)
-        pos = self._positions.get(key)
-        if pos is None:
-            pos = self._positions[key] = np.array([self.position[int(g)] for g in idx], dtype=int)
-        return vals[pos]
+        """vals at the global indices idx (positions looked up once per index array; the cache keeps
+        the array itself, so a new array that reuses a freed array's id() is not mistaken for it)."""
+        hit = self._positions.get(id(idx))
+        if hit is None or hit[0] is not idx:
+            hit = self._positions[id(idx)] = (idx, np.array([self.position[int(g)] for g in idx], dtype=int))
+        return vals[hit[1]]
 
     # -- the joints' contributions ---------------------------------------------
     def _joint_terms(self, X):
