@@ -368,7 +368,7 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
                "mpi_ranks": comm.size, "pid": os.getpid()}
     with outdir.claimed(started) if outdir else nullcontext():
         problem = scene.build(p, comm)
-        writer = RunWriter(outdir, problem, 1, 2) if outdir else None
+        writer = RunWriter(outdir, problem, 1, 2, p.get("section", 0.0)) if outdir else None
         if writer:
             writer.frame(0.0)
         t0 = time.perf_counter()
@@ -406,5 +406,6 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
                         f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
             outdir.do("write loadsteps.csv", write_loadsteps, outdir.file("loadsteps.csv"))
             outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
-            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots)
+            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots, writer.dim,
+                      writer.width)
     return problem, result, summary
