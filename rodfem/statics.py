@@ -406,6 +406,6 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
                         f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
             outdir.do("write loadsteps.csv", write_loadsteps, outdir.file("loadsteps.csv"))
             outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
-            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots, writer.dim,
-                      writer.width)
+            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots,
+                      writer.dim, writer.width)
     return problem, result, summary

@@ -184,9 +184,10 @@ def test_objectivity_under_a_superposed_rotation():
         _, dofs = B.space.collapse(n)
         B.x0.x.array[dofs] = (B.x0.x.array[dofs].reshape(-1, 3) @ Q.T).ravel()
     B.x1.x.array[:] = B.x0.x.array
+    B.t = A.t   # B is A's state at A's time; both go on for 20 steps (run continues from problem.t)
     hA, hB = History(), History()
-    run(A, 0.01, 0.2, writer=hA)
-    run(B, 0.01, 0.2, writer=hB)
+    run(A, 0.01, 0.3, writer=hA)
+    run(B, 0.01, 0.3, writer=hB)
     assert len(hA.H) == 21
     H_A, H_B = np.array(hA.H), np.array(hB.H)
     assert np.max(np.abs(H_A - H_B)) <= 1e-12 * np.max(H_A)
