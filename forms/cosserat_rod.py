@@ -68,6 +68,24 @@ the scheme is invariant under superposed rotations and the total angular
 momentum L = int rhoA phi x v + sum_i m_i d_i x w_i ds is conserved when no
 load acts.
 
+Viscoelasticity (generalized Maxwell in compliance form, forms/viscoelastic.py):
+`branches` = [maxwell(tau_k, C_N=..., C_M=...), ...] adds per branch k its
+stress resultants N_k and/or M_k (fields "N_k", "M_k", DG1, starting at 0:
+relaxed) with the complementary energy 1/2 N_k.C_Nk N_k + 1/2 M_k.C_Mk M_k
+(branch compliances > 0).  The momentum rows see N + sum N_k, M + sum M_k;
+the branch's spring strain C_Nk N_k plus its dashpot strain (rate N_k/eta,
+eta = tau_k/C_Nk) is the rod's strain:
+
+    C_Nk (d_t N_k + N_k/tau_k) = R^T d_s v + J_N^T v_d,     C_Mk (d_t M_k + M_k/tau_k) = J_K v_d
+    (rows scaled by tau_k/(tau_k + h): viscoelastic.row_scale).
+
+Midpoint rule, tested with (N_k, M_k)_m: H_{n+1} - H_n = -h d_n + h y.u with
+h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (`dissipation`).
+The equilibrium branch may keep zero compliances (a constraint with its
+multiplier): the branch rows do not care.  A branch on N is pointless for an
+inextensible, shear-rigid rod (its strain rate is zero, N_k stays 0): give
+it C_M only.
+
 Ports: a spatial moment m acts on the directors through
 <m, 1/2 sum_i d_i x w_i> (= m . omega, see `spatial_moment`); a body-fixed
 moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
@@ -78,6 +96,8 @@ import ufl
 from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
+
+from forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
 RATES = ("w1", "w2", "w3")
@@ -116,6 +136,11 @@ def shear_strain(r, d):
 def constraint_rate(d, w):
     """G_d w: g_ij = d_i . w_j + d_j . w_i for the 6 pairs i <= j."""
     return ufl.as_vector([ufl.inner(d[i], w[j]) + ufl.inner(d[j], w[i]) for i, j in PAIRS])
+
+
+def orthonormality(d):
+    """g_ij = d_i . d_j - delta_ij for the 6 pairs i <= j (position level; its rate is constraint_rate)."""
+    return ufl.as_vector([ufl.inner(d[i], d[j]) - (1.0 if i == j else 0.0) for i, j in PAIRS])
 
 
 def angular_velocity(d, w):
@@ -158,6 +183,23 @@ def compliances(EA, GA2, GA3, GJ, EI2, EI3):
     return tuple(inv[:3]), tuple(inv[3:])
 
 
+def maxwell(tau, C_N=None, C_M=None):
+    """A Maxwell branch on the stress resultants: springs with compliances C_N = (C_N1, C_N2, C_N3)
+    and/or C_M = (C_M1, C_M2, C_M3) (entries > 0; None: the branch does not act on N, resp. M)
+    in series with dashpots of relaxation time tau."""
+    parts = {}
+    for name, c in (("N", C_N), ("M", C_M)):
+        if c is None:
+            continue
+        c = np.asarray(c, dtype=float)
+        if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c <= 0):
+            raise ValueError(f"Maxwell branch: C_{name} must be three compliances > 0 (got {c!r}); "
+                             f"leave it out (None) for no branch on {name}")
+        parts[name] = c
+    stiffness = [1.0 / c for name in ("N", "M") if name in parts for c in parts[name]]
+    return Maxwell(tau, parts, stiffness, name="maxwell")
+
+
 class CosseratRod:
     """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
     about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0).
@@ -168,8 +210,22 @@ class CosseratRod:
     frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
     flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {**{d: (f"director {d} (d1 the axis, d2 and d3 span the section)", ("x", "y", "z")) for d in DIRECTORS},
+              "v": ("velocity d_t r of the centreline", ("x", "y", "z")),
+              **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
+              "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij "
+                      "(reactions to them)", tuple(f"{i + 1}{j + 1}" for i, j in PAIRS)),
+              "Gamma": ("strains Gamma_i = d_i . d_s r - delta_i1 of the configuration "
+                        "(C_N N = Gamma - Gamma at rest)", ("axial", "shear2", "shear3")),
+              "K": ("curvatures K_i = 1/2 eps_ijk d_s d_j . d_k of the configuration: torsion, bending "
+                    "about d2, d3 (C_M M = K - K at rest)", ("torsion", "bend2", "bend3")),
+              "N": ("stress resultants N on (d1, d2, d3): axial and shear forces (the state's field)",
+                    ("axial", "shear2", "shear3")),
+              "M": ("moments M on (d1, d2, d3): torsion and bending moments (the state's field)",
+                    ("torsion", "bend2", "bend3"))}
 
-    def __init__(self, rhoA, rhoJ, C_N, C_M):
+    def __init__(self, rhoA, rhoJ, C_N, C_M, branches=()):
         self.rhoA = float(rhoA)
         if not self.rhoA >= 0:  # also NaN
             raise ValueError(f"CosseratRod: rhoA must be a number >= 0 (got {rhoA!r})")
@@ -184,6 +240,15 @@ class CosseratRod:
         v3 = (3,)
         self.fields = ([Field(n, "P", 2, v3) for n in ("r", *DIRECTORS, "v", *RATES)]
                        + [Field("N", "DG", 1, v3), Field("M", "DG", 1, v3), Field("lam", "P", 2, (6,))])
+        # Maxwell branches: their stress resultants are internal variables, their
+        # compliances and 1/tau run-time constants
+        self.branches = active(branches)
+        self.branch_parameters = []
+        for k, b in enumerate(self.branches, 1):
+            self.fields += [Field(f"{name}_{k}", "DG", 1, v3) for name in ("N", "M") if name in b.spring]
+            inv_tau = 0.0 if np.isinf(b.tau) else 1.0 / b.tau
+            self.branch_parameters.append(ParameterSet(inv_tau=inv_tau, **{
+                f"C_{name}{i + 1}": c for name, cs in b.spring.items() for i, c in enumerate(cs)}))
 
     def _constants(self, domain):
         """(rhoA, director masses m_1..3, C_N, C_M) as UFL constants on `domain`."""
@@ -198,7 +263,20 @@ class CosseratRod:
         kin = 0.5 * rhoA * ufl.inner(x["v"], x["v"])
         kin += sum(0.5 * m * ufl.inner(x[n], x[n]) for m, n in zip(masses, RATES))
         pot = 0.5 * ufl.inner(x["N"], C_N * x["N"]) + 0.5 * ufl.inner(x["M"], C_M * x["M"])
+        for field, C, _ in self._branch_terms(dx.ufl_domain()):
+            pot = pot + 0.5 * ufl.inner(x[field], C * x[field])
         return (kin + pot) * dx
+
+    def _branch_terms(self, domain):
+        """[(field 'N_k' or 'M_k', its compliance matrix, 1/tau_k)] of the Maxwell branches."""
+        out = []
+        for k, (b, params) in enumerate(zip(self.branches, self.branch_parameters), 1):
+            c = params.on(domain)
+            for name in ("N", "M"):
+                if name in b.spring:
+                    C = ufl.as_matrix([[c[f"C_{name}{i + 1}"] if i == j else 0.0 for j in range(3)] for i in range(3)])
+                    out.append((f"{name}_{k}", C, c["inv_tau"]))
+        return out
 
     def residual(self, step, test, dx, ds):
         """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, w_m, N_m, M_m, lambda_{n+1})."""
@@ -208,6 +286,12 @@ class CosseratRod:
         d = [step.mid(n) for n in DIRECTORS]
         w = [step.mid(n) for n in RATES]
         N, M, lam = step.mid("N"), step.mid("M"), step.x1["lam"]
+        branches = self._branch_terms(dx.ufl_domain())
+        for field, _, _ in branches:   # parallel branches: the resultants add
+            if field.startswith("N"):
+                N = N + step.mid(field)
+            else:
+                M = M + step.mid(field)
         dv, dN, dM, dlam = test["v"], test["N"], test["M"], test["lam"]
         dw = [test[n] for n in RATES]
         # kinematics d_t q = v (nodal: lumped on the GLL rule)
@@ -226,11 +310,64 @@ class CosseratRod:
         gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
         F += (ufl.inner(C_N * step.rate("N") - gamma_rate, dN)
               + ufl.inner(C_M * step.rate("M") - curvature_rate(d, w), dM)) * dx
+        for field, C, inv_tau in branches:   # C_k (d_t N_k + N_k/tau_k) = strain rate, times tau_k/(tau_k + h)
+            rate = gamma_rate if field.startswith("N") else curvature_rate(d, w)
+            F += row_scale(step, inv_tau) * ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate,
+                                                      test[field]) * dx
         return F
+
+    def dissipation(self, step, dx, ds):
+        """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (None without branches)."""
+        if not self.branches:
+            return None
+        terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
+                 for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
+        return step.h * sum(terms[1:], terms[0]) * dx
+
+    @property
+    def massless(self):
+        """No inertia (rhoA = 0 and rhoJ = 0): statics through the integrator, the velocities mean nothing."""
+        return self.rhoA == 0 and not np.any(self.masses)
+
+    @staticmethod
+    def directors(q):
+        """The section frame (n, 3, 3), columns d1, d2, d3, at nodal values q (numbers, for pictures)."""
+        return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
+
+    def outputs(self, x):
+        """Strains Gamma, K of the configuration and the stress resultants N, M (UFL): the equilibrium
+        branch's plus every Maxwell branch's (parallel branches: the stresses add)."""
+        d = [x[n] for n in DIRECTORS]
+        N, M = x["N"], x["M"]
+        for field in (f.name for f in self.fields):
+            if field.startswith("N_"):
+                N = N + x[field]
+            elif field.startswith("M_"):
+                M = M + x[field]
+        return {"Gamma": shear_strain(x["r"], d) - ufl.as_vector([1.0, 0.0, 0.0]), "K": curvature(d), "N": N, "M": M}
 
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""
         return {}
+
+    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # At rest the compliance rows and the velocity-level constraint rows are empty; these
+    # total-form rows replace them (the rows tested with `static_fields`):
+    #     C_N (N - N_ref) = Pi(Gamma(q) - Gamma(q_ref)),   C_M (M - M_ref) = Pi(K(q) - K(q_ref)),
+    #     d_i . d_j - delta_ij = 0 at the nodes (GLL),
+    # with q_ref the reference state (the body's initial state).  They are exactly the
+    # invariants the rate form keeps (module docstring): a static solution is a rest
+    # state of the time stepping.
+    static_fields = ("N", "M", "lam")
+
+    def static_rows(self, x, ref, test, dx, ds):
+        _, _, C_N, C_M = self._constants(dx.ufl_domain())
+        d, d0 = [x[n] for n in DIRECTORS], [ref[n] for n in DIRECTORS]
+        gamma = shear_strain(x["r"], d) - shear_strain(ref["r"], d0)
+        kappa = curvature(d) - curvature(d0)
+        F = (ufl.inner(C_N * (x["N"] - ref["N"]) - gamma, test["N"])
+             + ufl.inner(C_M * (x["M"] - ref["M"]) - kappa, test["M"])) * dx
+        return F + ufl.inner(orthonormality(d), test["lam"]) * gll(dx)
 
     def momentum(self, x):
         """p = rhoA v and L = rhoA phi x v + sum_i m_i d_i x w_i (densities; L about the origin)."""

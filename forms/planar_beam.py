@@ -23,7 +23,29 @@ spinning beam build up strain; tests/test_planar_beam.py catches that.)
 Weak form: (r, phi, v, omega) in P_k, (Gamma, kappa) in DG_{k-1}; the balance
 rows are integrated by parts (the end terms are the ports), the strain rows
 are tested with DG_{k-1}.  Testing with (v_m, omega_m, N, M) gives
-H_{n+1} - H_n = h y.u exactly.
+H_{n+1} - H_n = h y.u exactly -- provided (N, M) lie in the test space
+DG_{k-1}.  For k = 1 they do: the pointwise discrete gradient of cellwise
+constant strains is cellwise constant.  For k >= 2 the discrete gradient of a
+non-quadratic W is not a polynomial (the balance error of log_axial at k = 2
+was 8e-8 of max|H|), so there N, M are extra DG_{k-1} fields, the L2
+projection of the effort with the quadrature rule of H: the strain increment
+is in DG_{k-1}, so int N.(Gamma_{n+1} - Gamma_n) = int grad_bar W.(Gamma_{n+1}
+- Gamma_n) = int W_{n+1} - W_n (Gonzalez, point by point), and the balance is exact again.
+(The efforts of Maxwell branches are not projected: at k >= 2 a non-quadratic
+branch law keeps an O(h^3) balance error per step.)
+
+Viscoelasticity (generalized Maxwell, forms/viscoelastic.py): `branches` =
+[maxwell(tau_j, EA_j, GA_j, EI_j), ...] adds per branch j its elastic strains
+(Gamma_j, kappa_j) (fields "Gamma_j", "kappa_j", DG_{k-1}, starting relaxed
+at 0) with energy W_j(Gamma_j, kappa_j); the resultants become N + sum N_j,
+M + sum M_j, and
+
+    d_t Gamma_j = A^T (d_s v - omega S d_s r) - R_j N_j,    d_t kappa_j = d_s omega - R_j M_j,
+
+R_j = diag(1/(tau_j EA_j), 1/(tau_j GA_j), 1/(tau_j EI_j)).  Testing the
+branch rows with (N_j, M_j) (the step's efforts of W_j) gives
+H_{n+1} - H_n = -h d_n + h y.u with h d_n = h int sum_j (N_j, M_j).R_j (N_j, M_j) ds
+(`dissipation`).  Without branches nothing of this is built.
 """
 import math
 import numbers
@@ -35,6 +57,8 @@ from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet, material
 from rodfem.model import Field
 
+from forms.viscoelastic import Maxwell, active
+
 S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])
 E1 = ufl.as_vector([1.0, 0.0])
 
@@ -43,6 +67,26 @@ def rotation(phi):
     """A(phi) = [d1 d2]."""
     c, s = ufl.cos(phi), ufl.sin(phi)
     return ufl.as_matrix([[c, -s], [s, c]])
+
+
+def planar_frame(q, position, offset=()):
+    """The point at `offset` X in the section frame: x = r + A(phi) X, and the angle phi (numbers;
+    for joints, rodfem/interconnection.py).  With an offset, x is trigonometric in phi."""
+    phi = q["phi"][0]
+    x = np.asarray(q[position], dtype=float)
+    if len(offset) and any(offset):
+        c, s = np.cos(phi), np.sin(phi)
+        x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
+    return Frame(x=x, phi=phi)
+
+
+def planar_directors(phi):
+    """The section frame [d1 d2 d3] (n, 3, 3) of angles phi (n,) in 3D: the plane is z = 0, d3 = e_z
+    (numbers; for pictures, rodfem/snapshot.py)."""
+    c, s = np.cos(phi), np.sin(phi)
+    R = np.zeros((len(phi), 3, 3))
+    R[:, 0, 0], R[:, 1, 0], R[:, 0, 1], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
+    return R
 
 
 def cross(a, b):
@@ -69,8 +113,34 @@ def log_axial(Gamma, kappa, EA, GA, EI, kappa0=0.0):
     (no compression through zero length).  Non-quadratic: use the
     discrete-gradient integrator for an exact energy balance.
     """
-    lam = 1.0 + Gamma[0]
-    return EA * (lam - 1.0 - ufl.ln(lam)) + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
+    return EA * stretch_energy(Gamma[0]) + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * (kappa - kappa0) ** 2
+
+
+def stretch_energy(G):
+    """lambda - 1 - ln(lambda) with lambda = 1 + G, accurate near G = 0.
+
+    Written directly, its derivative 1 - 1/lambda loses all digits of G below
+    eps: a stiff beam (EA = 2e7) then carries a residual noise EA eps = 2e-9,
+    above Newton's tolerance.  For |G| < 1e-2 the series
+    G^2/2 - G^3/3 + ... - G^9/9 (remainder <= |G|^10/10, 2e-17 of the value)
+    has no cancellation.
+    """
+    series = sum((-1) ** k * G ** k / k for k in range(2, 10))
+    return ufl.conditional(ufl.lt(abs(G), 1e-2), series, G - ufl.ln(1.0 + G))
+
+
+@material(strains=2, signed=("EA", "GA", "EI"))
+def hooke_branch(Gamma, kappa, EA, GA, EI):
+    """The spring of a Maxwell branch: W = 1/2 EA Gamma_1^2 + 1/2 GA Gamma_2^2 + 1/2 EI kappa^2 (stiffnesses >= 0)."""
+    return 0.5 * EA * Gamma[0] ** 2 + 0.5 * GA * Gamma[1] ** 2 + 0.5 * EI * kappa ** 2
+
+
+def maxwell(tau, EA=0.0, GA=0.0, EI=0.0, law=None):
+    """A Maxwell branch on (Gamma, kappa): a spring with small-strain stiffnesses (EA, GA, EI) (>= 0)
+    in series with a dashpot of relaxation time tau.  The spring is Hooke's law (`hooke_branch`)
+    or `law(EA, GA, EI)`, a material of this module with those small-strain stiffnesses (e.g. log_axial)."""
+    spring = (law or hooke_branch)(EA, GA, EI)
+    return Maxwell(tau, spring, (EA, GA, EI), name="maxwell")
 
 
 # -- the model -------------------------------------------------------------------
@@ -86,18 +156,19 @@ class PlanarBeam:
     position = "r"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {"phi": ("section angle phi (rad, unwrapped): d1 = (cos phi, sin phi)", ()),
+              "v": ("velocity d_t r of the centreline", ("x", "y")),
+              "omega": ("angular velocity d_t phi of the section", ()),
+              "Gamma": ("strains Gamma = A(phi)^T d_s r - e1 in the section frame (the state's field)",
+                        ("axial", "shear")),
+              "kappa": ("curvature kappa = d_s phi (the state's field)", ()),
+              "N": ("stress resultants N = dW/dGamma in the section frame: axial and shear force", ("axial", "shear")),
+              "M": ("bending moment M = dW/dkappa", ())}
 
-    @staticmethod
-    def frame(q, offset=()):
-        """The point at `offset` X in the section frame: x = r + A(phi) X, angle phi (numbers)."""
-        phi = q["phi"][0]
-        x = np.asarray(q["r"], dtype=float)
-        if len(offset) and any(offset):
-            c, s = np.cos(phi), np.sin(phi)
-            x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
-        return Frame(x=x, phi=phi)
+    frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
 
-    def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None):
+    def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None, branches=()):
         if degree < 1:
             raise ValueError(f"degree must be >= 1 (got {degree})")
         for name, value in (("rhoA", rhoA), ("rhoI", rhoI)):
@@ -111,14 +182,30 @@ class PlanarBeam:
         k = degree
         self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
+        if k >= 2:  # the efforts, projected on DG_{k-1} (module docstring); algebraic: only x_{n+1} is used
+            self.fields += [Field("N", "DG", k - 1, (2,)), Field("M", "DG", k - 1)]
+        # Maxwell branches with stiffness: their elastic strains are internal variables
+        self.branches = active(branches)
+        for j in range(1, len(self.branches) + 1):
+            self.fields += [Field(f"Gamma_{j}", "DG", k - 1, (2,)), Field(f"kappa_{j}", "DG", k - 1)]
         # an n-point Gauss rule is exact to degree 2n - 1 (DOLFINx picks n from the degree)
         self.quadrature_degree = 2 * k + 2 if gauss_points is None else 2 * gauss_points - 1
 
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + W(Gamma, kappa) ds."""
         c = self.densities.on(dx.ufl_domain())
-        return (0.5 * c["rhoA"] * ufl.inner(x["v"], x["v"]) + 0.5 * c["rhoI"] * x["omega"] ** 2
-                + self.energy(x["Gamma"], x["kappa"])) * dx
+        W = self.energy(x["Gamma"], x["kappa"])
+        for j, b in enumerate(self.branches, 1):
+            W = W + b.spring(x[f"Gamma_{j}"], x[f"kappa_{j}"])
+        return (0.5 * c["rhoA"] * ufl.inner(x["v"], x["v"]) + 0.5 * c["rhoI"] * x["omega"] ** 2 + W) * dx
+
+    def _branch_efforts(self, step, domain):
+        """[(N_j, M_j, mobilities [R_EA, R_GA, R_EI])] of the Maxwell branches."""
+        out = []
+        for j, b in enumerate(self.branches, 1):
+            Nj, Mj = step.effort(b.spring, [f"Gamma_{j}", f"kappa_{j}"])
+            out.append((Nj, Mj, b.mobility(domain)))
+        return out
 
     def residual(self, step, test, dx, ds):
         """E (x_{n+1} - x_n)/h - J(x_m) z, tested; z = (v_m, omega_m, N, M)."""
@@ -126,17 +213,69 @@ class PlanarBeam:
         r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")
         A = rotation(step.mid("phi"))
         N, M = step.effort(self.energy, ["Gamma", "kappa"])
+        projection = 0
+        if self.degree >= 2:
+            Nh, Mh = step.x1["N"], step.x1["M"]
+            projection = (ufl.inner(Nh - N, test["N"]) + (Mh - M) * test["M"]) * dx
+            N, M = Nh, Mh
+        branches = self._branch_efforts(step, dx.ufl_domain())
+        for Nj, Mj, _ in branches:   # parallel branches: the stresses add
+            N, M = N + Nj, M + Mj
         n = A * N
         c = self.densities.on(dx.ufl_domain())
-        return (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
-                + c["rhoA"] * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
-                + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
-                + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
-                + (step.rate("kappa") - w.dx(0)) * dk) * dx
+        F = projection + (ufl.inner(step.rate("r") - v, dr) + (step.rate("phi") - w) * dphi
+                          + c["rhoA"] * ufl.inner(step.rate("v"), dv) + ufl.inner(n, dv.dx(0))
+                          + c["rhoI"] * step.rate("omega") * dw + M * dw.dx(0) - ufl.inner(S_HAT * r_s, n) * dw
+                          + ufl.inner(step.rate("Gamma") - A.T * (v.dx(0) - w * S_HAT * r_s), dG)
+                          + (step.rate("kappa") - w.dx(0)) * dk) * dx
+        for j, ((Nj, Mj, R), b) in enumerate(zip(branches, self.branches), 1):
+            # d_t e_j = (kinematic strain rate) - R_j sigma_j, scaled by tau_j/(tau_j + h)
+            G, kap = f"Gamma_{j}", f"kappa_{j}"
+            flow = ufl.as_vector([R[0] * Nj[0], R[1] * Nj[1]])
+            F += b.row_scale(step, dx.ufl_domain()) * (
+                ufl.inner(step.rate(G) - A.T * (v.dx(0) - w * S_HAT * r_s) + flow, test[G])
+                + (step.rate(kap) - w.dx(0) + R[2] * Mj) * test[kap]) * dx
+        return F
+
+    def dissipation(self, step, dx, ds):
+        """h d_n = h int sum_j N_j.R_j N_j + R_j M_j^2 ds (None without branches)."""
+        if not self.branches:
+            return None
+        d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
+                for Nj, Mj, R in self._branch_efforts(step, dx.ufl_domain()))
+        return step.h * d * dx
+
+    @property
+    def massless(self):
+        """No inertia (rhoA = rhoI = 0): statics through the integrator, the velocities mean nothing."""
+        return all(isinstance(v, numbers.Real) and v == 0 for v in self.densities.values.values())
+
+    @staticmethod
+    def directors(q):
+        """The section frame (n, 3, 3) at nodal values q (numbers, for pictures)."""
+        return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
+
+    def outputs(self, x):
+        """The strains (the state's) and the stress resultants N = dW/dGamma, M = dW/dkappa (UFL)."""
+        G, k = ufl.variable(x["Gamma"]), ufl.variable(x["kappa"])
+        W = self.energy(G, k)
+        return {"Gamma": x["Gamma"], "kappa": x["kappa"], "N": ufl.diff(W, G), "M": ufl.diff(W, k)}
 
     def compatible_strains(self, x):
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""
         return {"Gamma": rotation(x["phi"]).T * x["r"].dx(0) - E1, "kappa": x["phi"].dx(0)}
+
+    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # At rest the strain rows above are empty (their rates and the velocities vanish):
+    # the strains are then fixed by these total-form rows, which replace the rows
+    # tested with `static_fields`.  Gamma = Pi(A^T r' - e1), kappa = Pi(phi') (Pi: the
+    # L2 projection on DG_{k-1}); the reference curvature kappa0 is in the material.
+    static_fields = ("Gamma", "kappa")
+
+    def static_rows(self, x, ref, test, dx, ds):
+        """(Gamma - (A^T r' - e1)) . dGamma + (kappa - phi') dkappa  (`ref` unused: absolute strains)."""
+        c = self.compatible_strains(x)
+        return (ufl.inner(x["Gamma"] - c["Gamma"], test["Gamma"]) + (x["kappa"] - c["kappa"]) * test["kappa"]) * dx
 
     def momentum(self, x):
         """Linear momentum p = rhoA v and angular momentum L_z = rhoA r x v + rhoI omega (densities)."""

@@ -30,7 +30,8 @@ from rodfem.interconnection import Frame
 from rodfem.materials import ParameterSet
 from rodfem.model import Field
 
-from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses
+from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
+from forms.planar_beam import planar_directors, planar_frame
 
 
 class PointMass:
@@ -39,6 +40,7 @@ class PointMass:
     position = "x"
     flows = {"force": "v"}
     kinematics = {"x": "v"}
+    labels = {"v": ("velocity of the point mass", ("x", "y", "z"))}
     supports = {}
     quadrature_degree = 0
 
@@ -59,6 +61,11 @@ class PointMass:
 
     def compatible_strains(self, x):
         return {}
+
+    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return None
 
     def momentum(self, x):
         m = self.parameters.on(ufl.domain.extract_unique_domain(x["v"]))["m"]
@@ -93,6 +100,8 @@ class PlanarRigidBody:
     position = "x"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"x": "v", "phi": "omega"}
+    labels = {"phi": ("angle of the body (rad)", ()), "v": ("velocity of the centre of mass", ("x", "y")),
+              "omega": ("angular velocity d_t phi", ())}
     supports = {}
     quadrature_degree = 0
 
@@ -116,19 +125,27 @@ class PlanarRigidBody:
     def compatible_strains(self, x):
         return {}
 
+    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return None
+
     def momentum(self, x):
         c = self.parameters.on(ufl.domain.extract_unique_domain(x["v"]))
         p = c["m"] * x["v"]
         return {"p_x": p[0], "p_y": p[1], "L_z": x["x"][0] * p[1] - x["x"][1] * p[0] + c["J"] * x["omega"]}
 
     @staticmethod
-    def frame(q, offset=()):
-        phi = q["phi"][0]
-        x = np.asarray(q["x"], dtype=float)
-        if len(offset) and any(offset):
-            c, s = np.cos(phi), np.sin(phi)
-            x = x + np.array([c * offset[0] - s * offset[1], s * offset[0] + c * offset[1]])
-        return Frame(x=x, phi=phi)
+    def directors(q):
+        """The body frame (n, 3, 3) at the angle q["phi"] (numbers, for pictures; the plane is z = 0)."""
+        return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
+
+    def box(self):
+        """The square plate of the same mass and inertia, edges (a, a, 0): J = m a^2 / 6 (pictures)."""
+        a = float(np.sqrt(6 * self.parameters.values["J"] / self.parameters.values["m"]))
+        return (a, a, 0.0)
+
+    frame = staticmethod(lambda q, offset=(): planar_frame(q, "x", offset))
 
     @staticmethod
     def initial(x, phi=0.0, v=(0.0, 0.0), omega=0.0):
@@ -142,6 +159,11 @@ class RigidBody:
     position = "x"
     flows = {"force": "v", "moment": "w1"}    # a moment needs a pairing (cosserat_rod.spatial_moment)
     kinematics = {"x": "v", "d1": "w1", "d2": "w2", "d3": "w3"}
+    labels = {**{d: (f"director {d} (principal axis of inertia)", ("x", "y", "z")) for d in DIRECTORS},
+              "v": ("velocity of the centre of mass", ("x", "y", "z")),
+              **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
+              "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij",
+                      ("11", "22", "33", "12", "13", "23"))}
     supports = {}
     quadrature_degree = 0
     frame = staticmethod(lambda q, offset=(): director_frame(q, "x", offset))
@@ -179,8 +201,24 @@ class RigidBody:
         F += ufl.inner(lam, constraint_rate(d, dw)) + ufl.inner(constraint_rate(d, w), test["lam"])
         return F * dx
 
+    @staticmethod
+    def directors(q):
+        """The body frame (n, 3, 3), columns d1, d2, d3 (numbers, for pictures)."""
+        return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
+
+    def box(self):
+        """Edges (a1, a2, a3) of the uniform box of the same mass and principal inertia (pictures):
+        J_1 = m (a2^2 + a3^2) / 12, ..., i.e. a_k^2 = 12 E_k / m with the director masses E_k."""
+        return tuple(float(np.sqrt(12 * e / self.parameters.values["m"])) for e in self.E)
+
     def compatible_strains(self, x):
         return {}
+
+    # statics and modes (rodfem/statics.py): d_i . d_j - delta_ij = 0 replaces the velocity-level row
+    static_fields = ("lam",)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        return ufl.inner(orthonormality([x[n] for n in DIRECTORS]), test["lam"]) * dx
 
     def momentum(self, x):
         """p = m v, L = x x m v + sum_i E_i d_i x w_i (about the origin)."""

@@ -50,6 +50,25 @@ matrix), hence C_{n+1} - C_n = 2 d_s r_m . d_s (r_{n+1} - r_n) =
 |d_s r_{n+1}|^2 - |d_s r_n|^2 cellwise: C = |d_s r|^2 stays exact if it holds
 at t = 0 (compatible_strains).
 
+Viscoelasticity (generalized Maxwell, Paper 4; forms/viscoelastic.py):
+`branches` = [maxwell(tau_k, EA_k), ...] adds per branch k the branch's
+elastic strain C_k (field "C_k", DG0; C_k = 1 is the relaxed branch, the
+start unless `initial` says otherwise) with the stored energy W_k(C_k)
+(a string material with small-strain stiffness EA_k, W_k''(1) = EA_k/4).
+With S_bar_k = 2 grad_bar W_k(C_k,n, C_k,n+1) the v-row carries the total
+stress S_bar + sum_k S_bar_k, and each branch has the row
+
+    int [(C_k,n+1 - C_k,n)/h - 2 d_s r_m . d_s v_m + R_k grad_bar W_k] dC_k = 0   (times tau_k/(tau_k + h)),
+    R_k = 4/(tau_k EA_k)  (so that C_k - 1 relaxes as exp(-t/tau_k) near C_k = 1)
+
+(Paper 4's dashpot  d_t C_el = 2 d_s r . d_s v - (2/etaA) W'(C_el)  with
+2/etaA = R_k).  Testing it with dC_k = grad_bar W_k (cellwise constant,
+as above) gives
+
+    H(x_{n+1}) - H(x_n) = -h d_n + h y.u,   h d_n = h int sum_k R_k (grad_bar W_k)^2 ds >= 0
+
+exactly for any W_k with the discrete gradient (`dissipation`).
+
 Supports: 'pinned' fixes r and v at an end; 'fix-x', 'fix-y', 'fix-z' fix one
 component (e.g. a crane trolley on a horizontal rail: 'fix-z' with z up).
 """
@@ -64,7 +83,15 @@ from rodfem.model import Field
 from rodfem.newton import Newton
 from rodfem.ports import ENDS
 
-from forms.string_materials import MATERIALS, Material  # noqa: F401  (re-exported)
+from forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
+from forms.viscoelastic import Maxwell, active
+
+
+def maxwell(tau, EA, law=logarithmic):
+    """A Maxwell branch of a string: a spring `law(EA=EA)` (a string material, small-strain
+    stiffness EA >= 0; EA = 0: no branch) in series with a dashpot of relaxation time tau."""
+    spring = law(EA=EA) if EA > 0 else None
+    return Maxwell(tau, spring, [EA / 4.0], name="maxwell")   # W''(1) = EA/4: the stiffness in C
 
 
 class String:
@@ -83,8 +110,13 @@ class String:
         return Frame(x=np.asarray(q["r"], dtype=float))
     fields = [Field("r", "P", 1, (3,)), Field("v", "P", 1, (3,)), Field("C", "DG", 0)]
     quadrature_degree = 2   # exact for every term: rhoA v.dv is quadratic, the rest cellwise constant
+    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    labels = {"v": ("velocity d_t r", ("x", "y", "z")),
+              "C": ("strain C = d_s r . d_s r (the state's field)", ()),
+              "stretch": ("stretch sqrt(C) = |d_s r|", ()),
+              "tension": ("tension N = 2 W'(C) sqrt(C) = |contact force|", ())}
 
-    def __init__(self, material, rhoA, end_masses=None):
+    def __init__(self, material, rhoA, end_masses=None, branches=()):
         if not isinstance(material, Material):
             raise TypeError("material must be a Material, e.g. string_materials.logarithmic(EA=20)")
         if not (np.isfinite(rhoA) and rhoA > 0):
@@ -97,6 +129,10 @@ class String:
         # The numbers enter the forms as fem.Constants (one set per mesh, like the
         # material's parameters), so a new EA, rhoA or end mass does not recompile.
         self.parameters = ParameterSet(rhoA=self.rhoA, **{"m_" + e: m for e, m in self.end_masses.items()})
+        # Maxwell branches with stiffness: their strains C_k are internal variables
+        self.branches = active(branches)
+        if self.branches:
+            self.fields = String.fields + [Field(f"C_{k}", "DG", 0) for k in range(1, len(self.branches) + 1)]
 
     def constants(self, domain):
         return self.parameters.on(domain)
@@ -114,7 +150,10 @@ class String:
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA v.v + W(C) ds + 1/2 m |v|^2 at the ends."""
         dom = dx.ufl_domain()
-        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + self.W(x["C"], dom)) * dx
+        W = self.W(x["C"], dom)
+        for k, b in enumerate(self.branches, 1):
+            W = W + b.spring(x[f"C_{k}"])
+        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + W) * dx
         ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
         return H + ends if ends is not None else H
 
@@ -125,15 +164,44 @@ class String:
         rs, v = step.mid("r").dx(0), step.mid("v")
         (Wbar,) = step.effort(lambda C: self.W(C, dom), ["C"])
         S = 2 * Wbar
+        branches = self._branch_efforts(step, dom)
+        for Wk, _ in branches:   # parallel branches: the stresses add
+            S = S + 2 * Wk
         F = (ufl.inner(step.rate("r") - v, dr)
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC) * dx
+        for k, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):
+            # d_t C_k = 2 d_s r . d_s v - R_k grad_bar W_k, scaled by tau_k/(tau_k + h)
+            row = step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
+            F += b.row_scale(step, dom) * row * test[f"C_{k}"] * dx
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
 
+    def _branch_efforts(self, step, domain):
+        """[(grad_bar W_k, R_k)] of the Maxwell branches."""
+        out = []
+        for k, b in enumerate(self.branches, 1):
+            (Wk,) = step.effort(b.spring, [f"C_{k}"])
+            out.append((Wk, b.mobility(domain)[0]))
+        return out
+
+    def dissipation(self, step, dx, ds):
+        """h d_n = h int sum_k R_k (grad_bar W_k)^2 ds (None without branches)."""
+        if not self.branches:
+            return None
+        return step.h * sum(R * Wk ** 2 for Wk, R in self._branch_efforts(step, dx.ufl_domain())) * dx
+
     def compatible_strains(self, x):
-        """C = d_s r . d_s r."""
-        return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0))}
+        """C = d_s r . d_s r; Maxwell branches relaxed, C_k = 1."""
+        relaxed = {f"C_{k}": _ones for k in range(1, len(self.branches) + 1)}
+        return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0)), **relaxed}
+
+    # statics and modes (rodfem/statics.py): the total-form row C = |d_s r|^2 replaces the rate row of C
+    static_fields = ("C",)
+
+    def static_rows(self, x, ref, test, dx, ds):
+        """(C - d_s r . d_s r) dC  (`ref` unused: C is absolute)."""
+        return (x["C"] - ufl.inner(x["r"].dx(0), x["r"].dx(0))) * test["C"] * dx
 
     def momentum(self, x):
         """p = rhoA v and L = r x rhoA v (densities); empty with end masses (they are point masses)."""
@@ -143,10 +211,18 @@ class String:
         Lm = ufl.cross(x["r"], p)
         return {"p_x": p[0], "p_y": p[1], "p_z": p[2], "L_x": Lm[0], "L_y": Lm[1], "L_z": Lm[2]}
 
+    def outputs(self, x):
+        """The strain C (the state's), the stretch and the tension (UFL)."""
+        return {"C": x["C"], "stretch": ufl.sqrt(x["C"]), "tension": self.tension(x["C"])}
+
     def tension(self, C):
         """N = 2 W'(C) sqrt(C) (UFL)."""
         Cv = ufl.variable(C)
         return 2 * ufl.diff(self.material(Cv), Cv) * ufl.sqrt(C)
+
+
+def _ones(x):
+    return np.ones(x.shape[1])
 
 
 # -- initial states -------------------------------------------------------------------
@@ -166,7 +242,8 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
 
         int 2 W'(|d_s r|^2) d_s r . d_s dr ds = sum of the loads' int u.dr   (supports: fixed r)
 
-    and sets C = |d_s r|^2, v = 0.  This is exactly the step equations with
+    and sets C = |d_s r|^2, v = 0 and the Maxwell branches relaxed (C_k = 1: the
+    equilibrium of a load held for long; W is the equilibrium branch's).  This is exactly the step equations with
     x_{n+1} = x_n, v = 0: an equilibrium found here stays at rest to solver
     tolerance.  Only loads with the default pairing (u.v) are supported.
     `supports` (default: the problem's) fix r in the static solve; they must
@@ -203,6 +280,8 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
     problem.x0.x.array[rdofs] = r.x.array
     S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))
     S.assign(problem.x0, "C", ufl.inner(r.dx(0), r.dx(0)))
+    for k in range(1, len(getattr(model, "branches", ())) + 1):   # long held: Maxwell branches relaxed
+        S.assign(problem.x0, f"C_{k}", _ones)
     set_state(problem)
     return solve.iterations
 

@@ -70,13 +70,23 @@ class Body:
 
     def forms(self, prefix=""):
         """dict of the UFL forms a run needs: F, J = dF/dx_{n+1}, H(x_{n+1}), the supplied work h y.u
-        (None without loads) and the observables ('obs:' + column name)."""
+        (None without loads), the observables ('obs:' + column name) and, only for a
+        dissipating model, 'dissipation' = h d_n (rodfem/model.py)."""
         F = self.residual_form()
         powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
         X1 = self.space.split(self.x1)
-        return {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
-                "work": self.h * sum(powers[1:], powers[0]) if powers else None,
-                **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
+        forms = {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
+                 "work": self.h * sum(powers[1:], powers[0]) if powers else None,
+                 **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
+        dissipation = self.dissipation_form()
+        if dissipation is not None:   # only a dissipating model has (and compiles) this form
+            forms["dissipation"] = dissipation
+        return forms
+
+    def dissipation_form(self):
+        """h d_n, the energy the step dissipates (UFL), or None: the model's optional `dissipation`."""
+        dissipation = getattr(self.model, "dissipation", None)
+        return dissipation(self.step, self.dx, self.ds) if dissipation is not None else None
 
     # -- set-up -------------------------------------------------------------
     def _tag_ends(self):
@@ -127,6 +137,9 @@ class Body:
                 obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             obs.update(self.momentum_forms(X))
+        for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
+            if hasattr(load, "observables"):
+                obs.update(load.observables(X, self.dx, self.ds))
         return obs
 
     def momentum_forms(self, X):

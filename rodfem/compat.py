@@ -41,6 +41,21 @@ def functionspace(mesh, el):
     return fem.FunctionSpace(mesh, el)
 
 
+def settle_coordinate_element(mesh):
+    """Give the mesh's coordinate element the equispaced variant ffcx 0.5 gives it when it first
+    compiles a form on the mesh.  ffcx replaces the element in place, which changes the signature
+    (the JIT cache key) of an expression compiled on that mesh afterwards: a cold run (forms
+    compiled) and a warm run (forms loaded) would key the same expression differently and the
+    warm run compile it again.  Settled up front, the key is the same in both."""
+    domain = mesh.ufl_domain()
+    el = getattr(domain, "_ufl_coordinate_element", None)
+    sub = getattr(el, "_sub_element", None)
+    if LEGACY_UFL and sub is not None and getattr(sub, "_variant", "") is None:
+        equispaced = ufl.FiniteElement(el.family(), el.cell(), el.degree(), el.quadrature_scheme(),
+                                       variant="equispaced")
+        domain._ufl_coordinate_element = ufl.VectorElement(equispaced)
+
+
 def petsc_vec(u):
     """The PETSc vector behind a dolfinx Function."""
     return u.x.petsc_vec if hasattr(u.x, "petsc_vec") else u.vector

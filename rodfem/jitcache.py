@@ -9,7 +9,8 @@ rodfem compiles under a lock: rank 0 of a Problem's communicator holds an
 exclusive ``fcntl.flock`` on CACHE/rodfem-jit.lock while the Problem is built
 (the other ranks only load what rank 0 compiled).  A NAME.c without
 NAME.c.cached found while holding the lock was therefore left by a compilation
-that died, and is removed, so ffcx compiles it afresh.  The lock also makes a
+that died, and is removed, so ffcx compiles it afresh (so is a NAME.c.cached
+whose NAME.c is gone).  The lock also makes a
 second run wait for a first one compiling the same forms instead of timing out.
 (A program other than rodfem compiling into the same cache at the same moment
 is not covered: give it its own XDG_CACHE_HOME.)
@@ -31,10 +32,14 @@ _held = {"depth": 0}
 
 
 def stale_sources(cache_dir):
-    """NAME.c files without their NAME.c.cached (left by a compilation that did not finish)."""
+    """NAME.c files without their NAME.c.cached (left by a compilation that did not finish), and
+    NAME.c.cached markers without NAME.c (left when a NAME.c was removed: ffcx would fail to
+    create the marker again after compiling)."""
     with os.scandir(cache_dir) as entries:
         names = {e.name for e in entries}
-    return [os.path.join(cache_dir, n) for n in names if n.endswith(".c") and n + ".cached" not in names]
+    sources = [n for n in names if n.endswith(".c") and n + ".cached" not in names]
+    markers = [n for n in names if n.endswith(".c.cached") and n[: -len(".cached")] not in names]
+    return [os.path.join(cache_dir, n) for n in sources + markers]
 
 
 def _unusable(cache_dir, e):

@@ -20,5 +20,27 @@ A model is any object with
 ``momentum(x)``  dict column -> density of momentum maps (p_x, ..., L_z),
                  written for unsupported bodies; may be empty
 ``flows``        dict load-kind -> flow field, e.g. {"force": "v", "moment": "omega"}
+
+Optional, for a model with dissipation (E x' = (J - R) z + B u, R >= 0):
+
+``dissipation(step, dx, ds)``
+                 the energy h d_n >= 0 the step dissipates, as a UFL form (h = step.h),
+                 such that H(x_{n+1}) - H(x_n) = -h d_n + h y.u holds exactly for the
+                 step's residual (e.g. h int z.R z ds with z the residual's efforts of
+                 the dissipative rows); None (or no such method) when the model
+                 dissipates nothing: then nothing is built or assembled for it
+                 (forms/viscoelastic.py: generalized Maxwell branches)
+
+Optional, for what a run writes (rodfem/snapshot.py, rodfem/frames.py):
+
+``outputs(x)``   dict name -> UFL expression of the state x: the strains and stress resultants
+                 written beside the state (cell by cell, at the nodes and segment midpoints)
+``directors(q)`` numbers: q dict field -> nodal values (n, size); returns the section frame
+                 (n, 3, 3), columns d1 (axis), d2, d3 (the section); a planar model's plane is
+                 z = 0, d3 = e_z.  Without it a body has no section (a string: a round tube)
+``labels``       dict field or output name -> (description, component names)
+``massless``     True when the model has no inertia: its velocities (the values of
+                 ``kinematics``) are not written
+``box()``        a rigid body's edge lengths (a1, a2, a3) along (d1, d2, d3), for pictures
 """
 from .spaces import Field  # noqa: F401

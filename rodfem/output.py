@@ -1,18 +1,28 @@
 """What a run leaves on disk (rank 0 writes; every file is flushed as it goes):
 
-* history.csv    one row per time level: t, H, supplied, newton_its, balance_error, observables
+* history.csv    one row per time level: t, H, supplied, (dissipated,) newton_its, balance_error, observables
+                 (`dissipated`, the cumulative sum h d_n, only for a dissipating model)
 * summary.json   parameters, versions, elements, dofs, timing, balance errors, status
                  ("running" from the start, replaced at the end by "completed",
                  "newton-failure", "interrupted" or "error")
-* centreline/    the deformed centreline as VTK polylines (one .vtu per frame) and
-                 centreline.pvd, the time series ParaView opens
-* shapes.png, energy.png   pictures of the deformed shapes and the energy history
+* centreline.pvd, centreline/   each body as one VTK polyline (.vtp, one per frame and body:
+                 the nodes in order, nodal fields, section frame, strains and stress resultants)
+* surface.pvd, surface/         each body's surface: its section swept along the centreline and
+                 turned with the directors (rods), a tube (strings), a box (rigid bodies), with the
+                 strains and stress resultants cell by cell (rodfem/frames.py)
+* fields.json    what every array of those files is (components, description), per body
+* shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
+                 (one GIF frame per .pvd frame; rodfem/animation.py)
+
+The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included); the
+section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
+computed from the state gathered on rank 0 (rodfem/snapshot.py): the same on any number of ranks.
 
 A run owns its directory (`OutDir`): a lock (``fcntl.flock`` on .rodfem.lock)
 refuses a second run into it while the first is running, and a new run first
 removes the files a previous run wrote there (the names above; other files are
 left alone), so a directory never mixes two runs.  summary.json, the frames,
-centreline.pvd and the pictures are written to a temporary file and renamed
+the .pvd files and the pictures are written to a temporary file and renamed
 (`replace_atomically`): a killed run leaves no half-written file.  A file that
 cannot be written ends the run with an InputError naming --out, on every rank.
 """
@@ -22,16 +32,21 @@ import fcntl
 import glob
 import json
 import os
-import xml.etree.ElementTree as ET
 from contextlib import contextmanager, suppress
 
 import numpy as np
 
 from . import compat
+from .animation import box_size, plot_shapes, sketch, write_animation
 from .errors import InputError, agreed
+from .frames import centreline, describe, surface
+from .snapshot import BodyView
+from .vtk import write_pvd, write_vtp
 
-OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "shapes.png", "energy.png",
-             "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp")
+OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
+             "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
+             "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
+             "checkpoint.npz", "checkpoint.npz.tmp*")
 LOCK_FILE = ".rodfem.lock"
 
 
@@ -97,14 +112,16 @@ class OutDir:
                     raise InputError(f"--out {self.path!r}: cannot {what} ({e.strerror or e}){hint}") from None
 
     @contextmanager
-    def claimed(self, summary):
-        """Lock the directory, clear a previous run's files, write summary.json (status "running");
+    def claimed(self, summary, clear=True):
+        """Lock the directory, clear a previous run's files (not when `clear` is false: a run resumed
+        from its checkpoint, rodfem/checkpoint.py), write summary.json (status "running");
         release the lock at the end of the block."""
         self.do("create the directory", os.makedirs, os.path.join(self.path, "centreline"), 0o777, True,
                 hint="; --out must name a directory that can be created and written")
         try:
             self.do("lock the directory", self._take_lock)
-            self.do("remove the previous run's files", self._clear)
+            if clear:
+                self.do("remove the previous run's files", self._clear)
             self.do("write summary.json", write_json, self.file("summary.json"), summary)
             yield self
         finally:
@@ -146,28 +163,17 @@ def bodies_of(problem):
     return [(name, ref.body) for name, ref in refs.items()] if refs else [("", problem)]
 
 
-def gather_centreline(problem):
-    """(s, position[npoints, dim], {field: values}) of the nodal fields of a body, on rank 0 (None elsewhere)."""
-    S = problem.space
-    pos = S.field(problem.model.position)
-    names = [f.name for f in S.fields if f.family == pos.family and f.degree == pos.degree]
-    local = {n: S.nodal(problem.x0, n) for n in names}
-    gathered = problem.comm.gather(local, root=0)
-    if problem.comm.rank != 0:
-        return None
-    s = np.concatenate([g[pos.name][0] for g in gathered])
-    order = np.argsort(s)
-    data = {n: np.concatenate([g[n][1] for g in gathered])[order] for n in names}
-    return s[order], data.pop(pos.name), data
-
-
 class RunWriter:
-    """Writes a run into a claimed OutDir: history rows, centreline frames, and at the end summary and plots."""
+    """Writes a run into a claimed OutDir: history rows, frames (centreline, surface), and at the end
+    summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
 
-    def __init__(self, out, problem, n_steps, frames=100):
+    def __init__(self, out, problem, n_steps, frames=100, section=0.0):
         self.out, self.problem = out, problem
         self.levels = frame_levels(n_steps, frames)
+        self.views = [BodyView(name, body) for name, body in bodies_of(problem)]
+        self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
+        self.dim = max(v.dim for v in self.views)
         self._file = self._csv = None
 
     # -- per step (collective) ----------------------------------------------------
@@ -186,48 +192,49 @@ class RunWriter:
         self._file.flush()
 
     def frame(self, t):
-        bodies = bodies_of(self.problem)
-        data = [gather_centreline(body) for _, body in bodies]  # collective
-        self.out.do("write a centreline frame", self._write_frame, t, bodies, data)
+        states = [view.gather() for view in self.views]  # collective
+        self.out.do("write a frame", self._write_frame, t, states)
 
-    def _write_frame(self, t, bodies, data):
-        import meshio
-        pts, cells, point_data, shapes = [], [], {}, []
-        single = len(bodies) == 1
-        for k, ((_, body), (s, pos, fields)) in enumerate(zip(bodies, data)):
-            start = sum(len(p) for p in pts)
-            p3 = np.zeros((len(s), 3))
-            p3[:, : pos.shape[1]] = pos
-            pts.append(p3)
-            idx = start + np.arange(len(s))
-            cells.append(("vertex", idx[:, None]) if len(s) == 1 else ("line", np.column_stack([idx[:-1], idx[1:]])))
-            columns = {"s": s, "body": np.full(len(s), float(k))}
-            if single:   # one body: its nodal fields too (a system's bodies have different fields)
-                for name, vals in fields.items():
-                    if vals.shape[1] == 2:
-                        vals = np.column_stack([vals, np.zeros(len(vals))])
-                    columns[name] = vals if vals.shape[1] > 1 else vals[:, 0]
-            for name, vals in columns.items():
-                point_data.setdefault(name, []).append(vals)
-            shapes.append(pos.copy())
-        point_data = {k: np.concatenate(v) for k, v in point_data.items()}
-        name = f"centreline/frame_{len(self.frames):05d}.vtu"
-        mesh = meshio.Mesh(np.concatenate(pts), cells, point_data=point_data)
-        replace_atomically(self.out.file(name), lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
-        self.frames.append((t, name))
-        self.snapshots.append((t, shapes))
-        replace_atomically(self.out.file("centreline.pvd"), self._write_pvd)
+    def file_name(self, kind, k, view):
+        """centreline/frame_00007.vtp (one body) or centreline/frame_00007_crank.vtp (a system's body)."""
+        return f"{kind}/frame_{k:05d}{'_' + view.name if len(self.views) > 1 else ''}.vtp"
 
-    def _write_pvd(self, path):
-        root = ET.Element("VTKFile", type="Collection", version="0.1")
-        coll = ET.SubElement(root, "Collection")
-        for t, name in self.frames:
-            ET.SubElement(coll, "DataSet", timestep=repr(t), part="0", file=name)
-        ET.ElementTree(root).write(path)
+    def _write_frame(self, t, states):
+        k = len(self.frames)
+        if k == 0:
+            self._first_frame(states)
+        names = []
+        for view, state in zip(self.views, states):
+            files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
+            polys = (centreline(state, view.labels),
+                     surface(state, view.labels, self.width, box_size, view.rates))
+            for name, poly in zip(files, polys):
+                replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
+            names.append(files)
+        self.frames.append((t, names))
+        self.snapshots.append((t, [sketch(state, self.width) for state in states]))
+        for i, kind in enumerate(("centreline", "surface")):
+            series = [(tf, b, files[b][i], view.name) for tf, files in self.frames
+                      for b, view in enumerate(self.views)]
+            replace_atomically(self.out.file(kind + ".pvd"), lambda tmp, d=series: write_pvd(tmp, d))
+
+    def _first_frame(self, states):
+        """The section's width (the parameter, or a 25th of the longest body), surface/, fields.json."""
+        lengths = [np.ptp(s.s) for s in states if s.kind in ("rod", "line")]
+        boxes = [np.max(s.box) for s in states if s.box is not None]
+        self.width = self.section or (max(lengths) / 25 if lengths else max(boxes, default=4.0) / 4)
+        os.makedirs(self.out.file("surface"), exist_ok=True)
+        fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
+                              "string diameter": 0.5 * self.width},
+                  "bodies": {view.name or "body": dict(model=type(view.model).__name__,
+                                                       **describe(state, view.labels, view.omitted,
+                                                                  view.rates))
+                             for view, state in zip(self.views, states)}}
+        write_json(self.out.file("fields.json"), fields)
 
     # -- at the end (also after a failure; collective) ----------------------------------
     def finish(self, summary, result):
-        """Close history.csv, write summary.json (replacing "running"), then the plots; each is tried
+        """Close history.csv, write summary.json (replacing "running"), then the pictures; each is tried
         even if one before failed (after a full disk, the summary may still fit), the first error raised."""
         errors = []
         for what, fn, *args in (("close history.csv", self._close),
@@ -249,7 +256,8 @@ class RunWriter:
         if result is not None and result.rows:
             plot_energy(self.out.file("energy.png"), result)
         if self.snapshots:
-            plot_shapes(self.out.file("shapes.png"), self.snapshots)
+            plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
+            write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
 
 
 def summarize(scene_name, params, problem, result, status="completed", failure=None):
@@ -279,49 +287,26 @@ def plot_energy(path, result):
     import matplotlib.pyplot as plt
     t, H, W = result.column("t"), result.column("H"), result.column("supplied")
     err = np.abs(result.column("balance_error"))[1:]
-    fig, ax = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    ax[0].plot(t, H, label="H (Hamiltonian)")
-    ax[0].plot(t, W, "--", label="supplied work  sum h y.u")
-    ax[0].plot(t, H - W, ":", label="H - supplied (constant)")
+    dissipates = "dissipated" in result.rows[0]
+    fig, ax = plt.subplots(3 if dissipates else 2, 1, figsize=(7, 8 if dissipates else 6), sharex=True)
+    ax[0].plot(t, H, label=r"$H$ (Hamiltonian)")
+    ax[0].plot(t, W, "--", label=r"supplied work $\sum h\,y\cdot u$")
+    if dissipates:   # the dissipated energy also on its own scale (middle panel)
+        D = result.column("dissipated")
+        ax[0].plot(t, D, "-.", label=r"dissipated $\sum h\,d_n$")
+        ax[0].plot(t, H + D - W, ":", label=r"$H + \sum h\,d_n - \sum h\,y\cdot u$ (constant)")
+        ax[1].plot(t, D, "-.", color="C2")
+        ax[1].set_ylabel(r"dissipated $\sum h\,d_n$")
+        balance = r"$|H_{n+1} - H_n + h\,d_n - h\,y\cdot u|$"
+    else:
+        ax[0].plot(t, H - W, ":", label=r"$H - \sum h\,y\cdot u$ (constant)")
+        balance = r"$|H_{n+1} - H_n - h\,y\cdot u|$"
     ax[0].set_ylabel("energy")
     ax[0].legend()
     floor = 1e-17 * max(np.max(np.abs(H)), 1e-300)  # below round-off: drawn at the floor
-    ax[1].semilogy(t[1:], np.maximum(err, floor), ".", ms=3)
-    ax[1].set_ylabel("|H_{n+1} - H_n - h y.u|")
-    ax[1].set_xlabel("t")
-    fig.tight_layout()
-    replace_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    plt.close(fig)
-
-
-def plot_shapes(path, snapshots, max_shapes=16):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    idx = np.unique(np.linspace(0, len(snapshots) - 1, min(max_shapes, len(snapshots))).astype(int))
-    cmap = plt.get_cmap("viridis")
-    dim = max(p.shape[1] for p in snapshots[0][1])
-    fig = plt.figure(figsize=(7, 6))
-    ax = fig.add_subplot(projection="3d" if dim == 3 else None)
-    for j, i in enumerate(idx):
-        t, shapes = snapshots[i]
-        c = cmap(j / max(len(idx) - 1, 1))
-        for b, p in enumerate(shapes):   # one line per body (a marker for a rigid body)
-            label = f"t = {t:.3g}" if j in (0, len(idx) - 1) and b == 0 else None
-            ax.plot(*[p[:, k] for k in range(dim)], "o" if len(p) == 1 else "-", color=c, lw=1.5, ms=4, label=label)
-    if dim == 2:
-        ax.set_aspect("equal", adjustable="datalim")
-    else:  # equal scales on the three axes: a cube around the swept region
-        pts = np.concatenate([p for i in idx for p in snapshots[i][1]])
-        centre, half = 0.5 * (pts.max(0) + pts.min(0)), 0.5 * np.max(np.ptp(pts, axis=0)) or 1.0
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-        ax.set_zlabel("z")
-    ax.set_xlabel("x")
-    ax.set_ylabel("y")
-    ax.legend()
-    ax.set_title("deformed centreline (colour = time)")
+    ax[-1].semilogy(t[1:], np.maximum(err, floor), ".", ms=3)
+    ax[-1].set_ylabel(balance)
+    ax[-1].set_xlabel("t")
     fig.tight_layout()
     replace_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     plt.close(fig)

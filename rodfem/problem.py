@@ -42,6 +42,7 @@ class Problem(Body):
         self.t = 0.0
         compiled = compile_forms(self.forms())
         self.F, self.J, self.H, self.work = (compiled[k] for k in ("F", "J", "H", "work"))
+        self.D = compiled.get("dissipation")   # h d_n; None: the model dissipates nothing
         self.observables_compiled = {k[4:]: f for k, f in compiled.items() if k.startswith("obs:")}
         self.newton = Newton(self.F, self.J, self.x1, self.bcs, options=newton_options)
 
@@ -70,6 +71,15 @@ class Problem(Body):
     def supplied_work(self):
         """h y.u of the last step, with u at t_{n+1/2} and y = flow_{n+1/2}."""
         return self.assemble(self.work) if self.work is not None else 0.0
+
+    @property
+    def dissipates(self):
+        """True if the model dissipates (the history then has the column 'dissipated')."""
+        return self.D is not None
+
+    def dissipated_energy(self):
+        """h d_n >= 0 of the last step (0 without dissipation)."""
+        return self.assemble(self.D) if self.D is not None else 0.0
 
     def hamiltonian(self):
         """H(x_{n+1})."""

@@ -2,7 +2,7 @@
 
 A scene lists its `Parameter`s (default, unit, allowed range) and a
 `build(p, comm)` that returns a `Problem`.  Every scene has the common
-parameters n_elements, dt, t_end, integrator and frames.  Scenes are found
+parameters n_elements, dt, t_end, integrator, frames and section.  Scenes are found
 through the entry-point group ``rodfem.scenes`` (see pyproject.toml), so
 rodfem itself names no model.
 """
@@ -84,8 +84,10 @@ def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
         Parameter("dt", dt, "s", "time step h", low=0, low_open=True),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
-        Parameter("frames", frames, "", "centreline frames written, evenly spaced with t = 0 and t_end "
-                  "(1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
+                  "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
+                  "(height: half of it; 0: a 25th of the longest body)", low=0),
     ]
 
 

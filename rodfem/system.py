@@ -247,6 +247,16 @@ class System:
         """h y.u of the last step: the bodies' ports and the driven joints."""
         return self._sum("work") + self.assembler.joint_work
 
+    @property
+    def dissipates(self):
+        """True if a body dissipates (rodfem/model.py: `dissipation`)."""
+        self.build()
+        return any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+
+    def dissipated_energy(self):
+        """h d_n of the last step: the sum over the dissipating bodies."""
+        return self._sum("dissipation")
+
     def observe(self):
         self.build()
         obs = self.assembler.point_observables()
@@ -512,12 +522,12 @@ class BlockAssembler:
         return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
 
     def _pick(self, vals, idx):
-        """vals at the global indices idx (positions looked up once per index array)."""
-        key = id(idx)
-        pos = self._positions.get(key)
-        if pos is None:
-            pos = self._positions[key] = np.array([self.position[int(g)] for g in idx], dtype=int)
-        return vals[pos]
+        """vals at the global indices idx (positions looked up once per index array; the cache keeps
+        the array itself, so a new array that reuses a freed array's id() is not mistaken for it)."""
+        hit = self._positions.get(id(idx))
+        if hit is None or hit[0] is not idx:
+            hit = self._positions[id(idx)] = (idx, np.array([self.position[int(g)] for g in idx], dtype=int))
+        return vals[hit[1]]
 
     # -- the joints' contributions ---------------------------------------------
     def _joint_terms(self, X):

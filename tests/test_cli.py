@@ -37,8 +37,8 @@ def test_run_writes_results(tmp_path):
     assert s["parameters"]["t_end"] == 3.0 and s["parameters"]["EA"] == 1e4
     assert s["steps"] == 30 and s["dofs"] == 11 * 6 + 10 * 3
     assert s["dolfinx_version"].startswith("0.")
-    assert s["max_balance_error_relative"] <= 1e-9
-    assert (out / "centreline.pvd").exists() and len(list((out / "centreline").glob("*.vtu"))) == 31
+    assert s["max_balance_error_relative"] <= 1e-11   # measured 1.1e-15
+    assert (out / "centreline.pvd").exists() and len(list((out / "centreline").glob("*.vtp"))) == 31
     assert (out / "shapes.png").stat().st_size > 1000 and (out / "energy.png").stat().st_size > 1000
 
 
@@ -48,7 +48,7 @@ def test_clamped_scene_has_no_momentum_columns(tmp_path):
     assert "tip_x" in h and "p_x" not in h and "L_z" not in h
 
 
-@pytest.mark.parametrize("args, words", [
+BAD_INPUT = [
     (["run", "no-such-scene"], ["unknown scene", "flying-spaghetti-2d"]),
     (["show", "no-such-scene"], ["unknown scene"]),
     (["run", "roll-up-2d", "--set", "nope=1"], ["unknown parameter 'nope'", "n_elements"]),
@@ -62,19 +62,36 @@ def test_clamped_scene_has_no_momentum_columns(tmp_path):
     (["run", "roll-up-2d", "--set", "integrator=euler"], ["'integrator'", "midpoint, discrete-gradient"]),
     (["run", "roll-up-2d", "--set", "dt=0.3"], ["'dt'", "whole number of steps"]),
     (["run", "roll-up-2d", "--set", "EA=nan"], ["'EA'"]),
-])
+    # upper bounds of a range
+    (["run", "roll-up-2d", "--set", "degree=4"], ["'degree'", "[1, 3]", "(got 4)"]),
+    (["run", "hanging-cable", "--set", "angle=181"], ["'angle'", "[-180, 180]", "(got 181)"]),
+    (["run", "taut-string-wave", "--set", "stretch=11"], ["'stretch'", "(1, 10]", "(got 11)"]),
+    # --set without '='
+    (["run", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
+    (["study", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
+]
+
+
+@pytest.mark.parametrize("args, words", BAD_INPUT, ids=[":".join(a).replace(":--set:", ":") for a, _ in BAD_INPUT])
 def test_bad_input_is_one_line(args, words, capsys, tmp_path):
-    assert main(args + ["--quiet", "--out", str(tmp_path / "x")] if args[0] == "run" else args) == 2
+    """Every kind of bad input ends with exit code 2 and one line naming the parameter and what is allowed."""
+    extra = {"run": ["--quiet", "--out", str(tmp_path / "x")], "study": ["--out", str(tmp_path / "x")]}
+    assert main(args + extra.get(args[0], [])) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and err.startswith("rodfem: error:")
     for w in words:
         assert w in err
 
 
-def test_bad_input_from_the_shell_has_no_traceback(rodfem, tmp_path):
-    p = rodfem("run", "cantilever-2d", "--set", "EA=-1", "--out", str(tmp_path))
+@pytest.mark.parametrize("setting, message", [
+    ("EA=-1", "rodfem: error: parameter 'EA' must be a number > 0 (got -1)"),
+    ("EA", "rodfem: error: --set expects NAME=VALUE (got 'EA')"),
+], ids=["negative", "no-equals-sign"])
+def test_bad_input_from_the_shell_has_no_traceback(rodfem, tmp_path, setting, message):
+    """From the shell: exit code 2 and exactly the one line on stderr, no traceback."""
+    p = rodfem("run", "cantilever-2d", "--set", setting, "--out", str(tmp_path))
     assert p.returncode == 2
-    assert p.stderr.strip().splitlines() == ["rodfem: error: parameter 'EA' must be a number > 0 (got -1)"]
+    assert p.stderr.strip().splitlines() == [message]
 
 
 def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
@@ -91,6 +108,8 @@ def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
 
 @pytest.mark.mpi
 def test_mpi_two_ranks_match_serial(rodfem, tmp_path):
+    """mpirun -n 2 gives the serial history: every column at every time level (measured <= 1e-14 of
+    its scale; bound 1e-11) and the same Newton iterations."""
     args = ["run", "flying-spaghetti-2d", "--set", "n_elements=20", "--set", "t_end=5", "--quiet"]
     serial, par = tmp_path / "np1", tmp_path / "np2"
     assert rodfem(*args, "--out", str(serial)).returncode == 0
@@ -100,5 +119,5 @@ def test_mpi_two_ranks_match_serial(rodfem, tmp_path):
     assert json.loads((par / "summary.json").read_text())["mpi_ranks"] == 2
     for col in ("H", "supplied", "tip_x", "tip_y", "p_x", "p_y", "L_z"):
         scale = max(np.max(np.abs(a[col])), 1.0)
-        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
+        assert np.max(np.abs(a[col] - b[col])) <= 1e-11 * scale, col
     assert np.array_equal(a["newton_its"], b["newton_its"])

@@ -24,13 +24,13 @@ def test_chord_newton_falls_back_to_full_newton_and_agrees(monkeypatch):
     full, p = spaghetti()
     ref = run(full, p["dt"], p["t_end"])
     # a chord Newton allowed only 3 iterations cannot converge the loaded steps: each such step is
-    # repeated with full Newton, and the trajectory is the same to solver tolerance
+    # repeated with full Newton, and the trajectory is the same to solver tolerance (measured: identical)
     chord, _ = spaghetti({"snes_lag_jacobian": 8, "snes_lag_jacobian_persists": True, "snes_max_it": 3})
     res = run(chord, p["dt"], p["t_end"])
     assert len(retries) >= 25  # at least every loaded step (t <= 2.5) was repeated
     for col in ("H", "tip_x", "tip_y", "L_z"):
-        assert np.max(np.abs(res.column(col) - ref.column(col))) <= 1e-8 * np.max(np.abs(ref.column(col)))
-    assert res.max_balance_error <= 1e-9 * np.max(res.column("H"))
+        assert np.max(np.abs(res.column(col) - ref.column(col))) <= 1e-11 * np.max(np.abs(ref.column(col)))
+    assert res.max_balance_error <= 1e-11 * np.max(res.column("H"))   # measured 2.0e-15
 
 
 def test_problem_options_do_not_leak_into_the_next_problem():

@@ -125,10 +125,10 @@ def test_a_new_run_replaces_the_previous_runs_files(tmp_path):  # 6, frames
     out = tmp_path / "out"
     fs = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--quiet", "--out", str(out)]
     assert main([*fs, "--set", "t_end=3"]) == 0
-    assert len(list((out / "centreline").glob("*.vtu"))) == 31
+    assert len(list((out / "centreline").glob("*.vtp"))) == 31
     (out / "notes.txt").write_text("mine")
     assert main([*fs, "--set", "t_end=2", "--set", "frames=4"]) == 0
-    vtus = sorted((out / "centreline").glob("*.vtu"))
+    vtus = sorted((out / "centreline").glob("*.vtp"))
     times = [float(t) for t in re.findall(r'timestep="([^"]+)"', (out / "centreline.pvd").read_text())]
     assert len(vtus) == 4 and len(times) == 4 and times[0] == 0.0 and times[-1] == pytest.approx(2.0)
     assert len(history(out)) == 21 and summary(out)["parameters"]["t_end"] == 2.0
@@ -144,7 +144,8 @@ def test_frames_one_is_the_end_state(tmp_path):
 def test_a_full_disk_is_one_line_and_keeps_a_summary(tmp_path):  # 9: writes fail as on a full disk
     out = tmp_path / "out"
     code = ("import resource, sys\nfrom rodfem.cli import main\n"
-            "resource.setrlimit(resource.RLIMIT_FSIZE, (6000, 6000))\n"  # after MPI_Init: files of at most 6 kB
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (12000, 12000))\n"  # after MPI_Init: files of at most
+            # 12 kB (history.csv reaches it first; a frame of 4 elements is 4 to 6 kB)
             f"sys.exit(main({['run', *LONG, '--set', 't_end=10', '--out', str(out)]!r}))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env(), timeout=120)
     assert p.returncode == 2

@@ -26,7 +26,13 @@ from demos.taut_string_wave import scene as wave  # noqa: E402
 SCENES = {s.name: s for s in (hanging, crane, wave)}
 
 
-def balance_ok(res, tol=1e-9):
+# Per-step energy balance, relative to max|H|.  Measured 1.7e-13 ... 2.2e-12 for every string scene
+# below (Newton stops at |F| <= 1e-10, which sets this level); bound 1e-11.  The discrete gradient
+# without its Taylor term gives 1.7e-11 (biot) and 2.3e-11 (logarithmic) on the 3D swing.
+BALANCE = 1e-11
+
+
+def balance_ok(res, tol=BALANCE):
     """Every step: |H_{n+1} - H_n - h y.u| <= tol max|H|."""
     H = res.column("H")
     return np.max(np.abs(res.column("balance_error"))) <= tol * np.max(np.abs(H))
@@ -40,15 +46,21 @@ def relative_balance(res):
 
 @pytest.mark.parametrize("lam", [0.8, 1.0001, 1.3, 2.0])
 def test_material_tensions(lam):
+    """N(lambda) of each material against its closed form."""
     EA = 7.0
     assert logarithmic(EA=EA).tension(lam) == pytest.approx(EA / 2 * (lam - 1 / lam), rel=1e-12)
     assert kirchhoff(EA=EA).tension(lam) == pytest.approx(EA / 2 * (lam ** 3 - lam), rel=1e-12)
     assert biot(EA=EA).tension(lam) == pytest.approx(EA * (lam - 1), rel=1e-12)
-    t = tension_only(EA=EA).tension(lam)
-    if lam >= 1.3:   # taut: the Kirchhoff law up to the transition width delta = 1e-3
-        assert t == pytest.approx(EA / 2 * (lam ** 3 - lam), rel=2e-3)
-    if lam < 1:      # slack: (almost) no tension, but positive and finite
-        assert 0 < t < 1e-5 * EA
+
+
+def test_tension_only_is_kirchhoff_when_taut_and_slack_when_compressed():
+    """tension-only: the Kirchhoff law up to the transition width delta = 1e-3 when taut (lambda = 1.3, 2),
+    (almost) no tension, but positive and finite, when compressed (lambda = 0.8, 0.99)."""
+    EA = 7.0
+    for lam in (1.3, 2.0):
+        assert tension_only(EA=EA).tension(lam) == pytest.approx(EA / 2 * (lam ** 3 - lam), rel=2e-3)
+    for lam in (0.8, 0.99):
+        assert 0 < tension_only(EA=EA).tension(lam) < 1e-5 * EA
 
 
 @pytest.mark.parametrize("name", sorted(MATERIALS))
@@ -80,7 +92,8 @@ def test_scalar_discrete_gradient_property(dC):
 
 @pytest.mark.parametrize("material", sorted(MATERIALS))
 def test_discrete_gradient_balance_every_material(material):
-    """3D swing (tilt + out-of-plane push) under gravity: balance per step to 1e-9 max|H|."""
+    """3D swing (tilt + out-of-plane push) under gravity: balance per step to 1e-11 max|H| (measured
+    1.1e-12 biot, 1.7e-12 kirchhoff, 1.3e-12 logarithmic, 1.7e-12 tension-only)."""
     res, s = run_scene(hanging, {"material": material, "integrator": "discrete-gradient", "t_end": 2.0,
                                  "vy0": 1.0})
     assert res.steps == 200
@@ -91,6 +104,8 @@ def test_discrete_gradient_balance_every_material(material):
 
 
 def test_midpoint_breaks_balance_for_logarithmic_not_for_kirchhoff():
+    """Measured: logarithmic 1.0e-6 (midpoint) against 2.0e-13 (discrete gradient); kirchhoff (W
+    quadratic in C) 1.9e-12 with either rule."""
     err = {}
     for material in ("logarithmic", "kirchhoff"):
         for rule in ("midpoint", "discrete-gradient"):
@@ -100,26 +115,37 @@ def test_midpoint_breaks_balance_for_logarithmic_not_for_kirchhoff():
     assert err["logarithmic", "midpoint"] > 1e-8
     assert err["logarithmic", "midpoint"] > 1e4 * err["logarithmic", "discrete-gradient"]
     # W quadratic in C: the midpoint rule IS a discrete gradient
-    assert err["kirchhoff", "midpoint"] <= 1e-9
+    assert err["kirchhoff", "midpoint"] <= BALANCE
 
 
 def test_crane_balance_with_end_masses_and_compatibility():
-    res, s = run_scene(crane, {"trolley_mass": 0.2, "t_end": 3.0})
+    """Crane with trolley and load masses: balance per step (measured 1.7e-13 max|H|), the load is
+    carried along, the three ports are there, and the strain stays compatible, C = |d_s r|^2 cellwise
+    (the r-row gives r_{n+1} - r_n = h v_m at the nodes; measured 1.8e-12 of max C after 60 steps,
+    Newton's tolerance accumulating; bound 1e-11)."""
+    p = crane.values({"trolley_mass": 0.2, "t_end": 3.0})
+    pr = crane.build(p, MPI.COMM_SELF)
+    res = run(pr, p["dt"], p["t_end"])
     assert balance_ok(res), relative_balance(res)
     assert np.max(res.column("tip_x")) > 0.5          # the load is carried along
-    assert s["ports"] == ["trolley force", "gravity", "load weight"]
+    assert [load.name for load in pr.loads] == ["trolley force", "gravity", "load weight"]
+    assert compatibility_error(pr) <= 1e-11
+
+
+def compatibility_error(pr):
+    """||C - |d_s r|^2||_L2 / max C of x_n (P1 r, DG0 C)."""
+    from dolfinx import fem
+    X = pr.space.split(pr.x0)
+    err = fem.assemble_scalar(fem.form((X["C"] - ufl.inner(X["r"].dx(0), X["r"].dx(0))) ** 2 * ufl.dx))
+    return math.sqrt(err) / np.max(pr.space.nodal(pr.x0, "C")[1])
 
 
 def test_strain_stays_compatible():
-    """C_{n+1} = |d_s r_{n+1}|^2 cellwise after many steps (P1 r, DG0 C)."""
+    """C_{n+1} = |d_s r_{n+1}|^2 cellwise after 100 steps (P1 r, DG0 C); measured 3.4e-12 of max C."""
     p = hanging.values({"t_end": 1.0, "vy0": 1.0})
     pr = hanging.build(p, MPI.COMM_WORLD)
     run(pr, p["dt"], p["t_end"])
-    X = pr.space.split(pr.x1)
-    C0 = np.max(pr.space.nodal(pr.x1, "C")[1])
-    from dolfinx import fem
-    err = fem.assemble_scalar(fem.form((X["C"] - ufl.inner(X["r"].dx(0), X["r"].dx(0))) ** 2 * ufl.dx))
-    assert math.sqrt(err) <= 1e-11 * C0
+    assert compatibility_error(pr) <= 1e-11
 
 
 def test_static_equilibrium_stays_at_rest():
@@ -141,6 +167,28 @@ def test_second_order_in_time():
     errs = [np.linalg.norm(tip(0.4 / k) - ref) for k in (32, 64, 128, 256)]
     orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all((orders > 1.9) & (orders < 2.1)), orders
+
+
+def test_spatial_order_of_a_vibrating_string():
+    """A dynamic run: a pre-stretched string (logarithmic law, lambda_0 = 1.1, pinned ends) released
+    from a smooth transverse shape, 200 steps of the discrete gradient to t = 0.2 (about a third of
+    its fundamental period).  At this fixed dt the nodal positions on 8, 16, 32, 64 elements converge
+    with order 2 (P1): successive differences at the common nodes.  Measured orders 2.02, 2.02
+    (the 4 -> 8 difference is pre-asymptotic: 2.23); bound 2 +- 0.2."""
+    def positions(n):
+        model = String(logarithmic(EA=100.0), 1.0)
+        a = 0.03
+        init = {"r": lambda x: np.vstack([1.1 * x[0], a * np.sin(np.pi * x[0]), a / 2 * np.sin(2 * np.pi * x[0])])}
+        pr = Problem(model, 1.0, n, supports=[Support("left", "pinned"), Support("right", "pinned")],
+                     initial=init, integrator="discrete-gradient", comm=MPI.COMM_SELF)
+        res = run(pr, 1e-3, 0.2)
+        assert balance_ok(res)
+        return pr.space.nodal(pr.x0, "r")[1]
+    r = {n: positions(n) for n in (8, 16, 32, 64)}
+    assert abs(r[64][32, 1]) < 0.5 * 0.03                       # it moved: the midpoint swung through
+    d = np.array([np.max(np.abs(r[n] - r[2 * n][::2])) for n in (8, 16, 32)])
+    orders = np.log2(d[:-1] / d[1:])
+    assert np.all(np.abs(orders - 2) <= 0.2), (d, orders)
 
 
 def exact_hanging(s, L, EA, rhoA, g):
@@ -214,9 +262,17 @@ def test_wave_speed():
 
 # -- extreme cases -------------------------------------------------------------------
 
+# Stiff cables (EA = 1e7): the balance error is the round-off of W = EA/4 (C - ln C - 1) near C = 1,
+# about eps EA L = 2.2e-9 per evaluation of H; measured 2.1e-10 absolute (3.2e-10 of max|H| = 0.65).
+# Bound: eps EA L (10x the measured value), not a multiple of max|H|.
+def stiff_balance_ok(res, EA, L=1.0):
+    return np.max(np.abs(res.column("balance_error"))) <= np.finfo(float).eps * EA * L
+
+
 def test_stiff_cable():
     """EA / (rhoA g L) = 1.02e6: axial frequencies ~1e4 x those of the swing; no divergence,
-    the balance holds and the cable stays (nearly) inextensible while it swings in 3D."""
+    the balance holds (to the round-off of W, see stiff_balance_ok) and the cable stays (nearly)
+    inextensible while it swings in 3D."""
     p = hanging.values({"EA": 1e7, "t_end": 1.0, "dt": 0.01, "vy0": 0.5})
     assert p["EA"] / (p["rhoA"] * p["g"] * p["L"]) >= 1e6
     pr = hanging.build(p, MPI.COMM_SELF)
@@ -226,7 +282,7 @@ def test_stiff_cable():
         def record(self, row, problem):
             strain.append(np.max(np.abs(problem.space.nodal(problem.x1, "C")[1] - 1)))
     res = run(pr, p["dt"], p["t_end"], writer=Track())
-    assert res.steps == 100 and balance_ok(res), relative_balance(res)
+    assert res.steps == 100 and stiff_balance_ok(res, p["EA"]), relative_balance(res)
     # static strain at the top: C - 1 ~ 2 rhoA g L / EA = 2e-6; swinging changes the tension O(1)
     assert max(strain) < 1e-5
     assert np.ptp(res.column("tip_x")) > 0.3 and np.ptp(res.column("tip_y")) > 0.1
@@ -234,8 +290,10 @@ def test_stiff_cable():
 
 @pytest.mark.parametrize("EA, dt", [(20.0, 0.25), (1e7, 0.1)])
 def test_large_time_steps(EA, dt):
+    """25 and 50 steps per swing period: bounded, balance kept (measured 1.0e-12 max|H| at EA = 20,
+    2.0e-10 absolute at EA = 1e7: the round-off of W, see stiff_balance_ok)."""
     res, s = run_scene(hanging, {"EA": EA, "dt": dt, "t_end": 5.0})
-    assert balance_ok(res), relative_balance(res)
+    assert balance_ok(res) if EA < 1e3 else stiff_balance_ok(res, EA), relative_balance(res)
     d = np.hypot(res.column("tip_x"), res.column("tip_z"))
     assert np.all(np.isfinite(d)) and np.max(d) < 2.0   # bounded (the stretch at EA = 20 is ~1.3)
 
@@ -288,13 +346,29 @@ def test_bad_parameter_cli(rodfem, tmp_path):
     assert len(lines) == 1 and "parameter 'EA' must be a number > 0" in lines[0]
 
 
+def read_history(path):
+    import csv
+    with open(os.path.join(path, "history.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
 @pytest.mark.mpi
 def test_crane_mpi_matches_serial(rodfem, tmp_path):
+    """Crane on 1 and 2 ranks: the whole histories agree, every column at every time level against its
+    scale (energies: max|H|, positions: the cable length 1).  Measured <= 1.7e-13 of the scale and the
+    same Newton iterations; bound 1e-11."""
     args = ["--set", "t_end=1.0", "--quiet"]
     r1 = rodfem("run", "crane-manoeuvre", *args, "--out", str(tmp_path / "s"))
     r2 = rodfem("run", "crane-manoeuvre", *args, "--out", str(tmp_path / "p"), np=2)
     assert r1.returncode == 0 and r2.returncode == 0, r2.stderr
-    s1, s2 = (json.load(open(os.path.join(tmp_path, d, "summary.json"))) for d in ("s", "p"))
-    assert s2["mpi_ranks"] == 2 and s2["max_balance_error_relative"] <= 1e-9
-    for k in ("tip_x", "tip_z", "H"):
-        assert s2["final"][k] == pytest.approx(s1["final"][k], rel=1e-9, abs=1e-12)
+    s2 = json.load(open(os.path.join(tmp_path, "p", "summary.json")))
+    assert s2["mpi_ranks"] == 2 and s2["max_balance_error_relative"] <= BALANCE
+    a, b = read_history(tmp_path / "s"), read_history(tmp_path / "p")
+    assert list(a) == list(b) and len(a["t"]) == 21
+    assert np.array_equal(a["newton_its"], b["newton_its"])
+    H = np.max(np.abs(a["H"]))
+    scale = {"t": 1.0, "H": H, "supplied": H, "balance_error": H, "tip_x": 1.0, "tip_y": 1.0, "tip_z": 1.0}
+    for k in a:
+        if k != "newton_its":
+            assert np.max(np.abs(a[k] - b[k])) <= 1e-11 * scale[k], k

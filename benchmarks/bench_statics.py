@@ -1,0 +1,53 @@
+"""Static roll-up and helix (rodfem/statics.py): the error against the exact circle/helix over the mesh,
+with two load-step schedules, and the observed spatial order -> statics.md.
+
+    .venv/bin/python benchmarks/bench_statics.py [--out benchmarks]     (about 3 minutes)
+"""
+import argparse
+import os
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from rodfem.scene import load
+from rodfem.statics import Statics
+
+CASES = [("roll-up-2d", {}, (8, 16, 32, 64)), ("roll-up-2d", {"turns": 10.0}, (64,)),
+         ("roll-up-3d", {}, (8, 16, 32, 64, 128)), ("helix-3d", {}, (8, 16, 32, 64, 128))]
+
+
+def solve(name, extra, n, steps, adaptive):
+    scene = load(name)
+    p = scene.values({"n_elements": n, **extra})
+    problem = scene.build(p, MPI.COMM_WORLD)
+    t0 = time.perf_counter()
+    res = Statics(problem).solve(p["t_end"], steps, adaptive)
+    wall = time.perf_counter() - t0
+    obs, ref = problem.observe(), scene.reference(p)
+    err = max(abs(obs[k] - v) for k, v in ref.items() if k != "scale") / ref["scale"]
+    return err, len(res.steps), res.failed, res.newton_its, wall
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
+    args = ap.parse_args()
+    lines = ["| scene | elements | error / L (1 adaptive) | load steps (halved), Newton its | "
+             "error / L (10 fixed) | load steps (halved), Newton its | order |", "|---|---|---|---|---|---|---|"]
+    for name, extra, meshes in CASES:
+        prev = None
+        for n in meshes:
+            a = solve(name, extra, n, 1, True)
+            b = solve(name, extra, n, 10, False)
+            order = f"{np.log2(prev / a[0]):.2f}" if prev and a[0] > 1e-12 else ""
+            prev = a[0]
+            label = name + ("" if not extra else " " + " ".join(f"{k}={v:g}" for k, v in extra.items()))
+            lines.append(f"| {label} | {n} | {a[0]:.3e} | {a[1]} ({a[2]}), {a[3]} | {b[0]:.3e} | {b[1]} ({b[2]}), {b[3]} | {order} |")
+            print(lines[-1], flush=True)
+    with open(os.path.join(args.out, "statics.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()

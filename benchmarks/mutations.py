@@ -1,0 +1,379 @@
+"""Mutation check: does the test suite notice when the physics (or the contract) is broken?
+
+Each mutation below is a small, deliberate break of the source: a file, an exact piece of text and
+its replacement, and the tests that must catch it.  For every mutation the tracked files of the
+repository are copied to a scratch directory, the text is replaced there (it must occur exactly
+once, otherwise the mutation is reported as stale), and just the listed tests run in the copy, with
+the copy first on PYTHONPATH (so that `rodfem`, `forms`, `demos`, the entry-point scenes, the
+`rodfem` console script and `mpirun` children all import the mutated code; a preflight checks
+this).  A mutation is caught when at least one of its tests fails; the table says which did.
+
+    .venv/bin/python benchmarks/mutations.py                  # all mutations, a few minutes
+    .venv/bin/python benchmarks/mutations.py --only helix-ignores-constraint dg-no-taylor-term
+    .venv/bin/python benchmarks/mutations.py --list
+    # which tests of another commit catch each mutation (whole suite per mutation, ~1 hour):
+    .venv/bin/python benchmarks/mutations.py --ref main --all-tests --out /tmp/mutations-main.md
+
+Writes benchmarks/mutations.md (or --out) and exits non-zero if any mutation survived, could not be
+applied, or broke the test run itself.  Run it before closing any issue that touches physics or
+the engine; a new model (multibody, viscoelasticity, actuators) adds its own mutations here.
+The JIT cache (~/.cache/fenics) is shared: a mutated form compiles once under its own key.
+"""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PYTHON = sys.executable
+
+
+@dataclass
+class Mutation:
+    name: str
+    file: str
+    edits: list          # [(old, new), ...] in `file`; each old text must occur exactly once
+    tests: list          # pytest node ids (relative to the repository) that must catch it
+    what: str            # the defect it stands for
+
+
+M = Mutation
+MUTATIONS = [
+    # -- planar beam ---------------------------------------------------------------------------
+    M("planar-S-sign", "forms/planar_beam.py",
+      [("S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])", "S_HAT = ufl.as_matrix([[0.0, 1.0], [-1.0, 0.0]])")],
+      ["tests/test_planar_beam.py::test_objectivity_rigid_rotation_gives_no_strain_rate",
+       "tests/test_planar_beam.py::test_spinning_beam_stretches_only_by_centrifugal_force"],
+      "flipped sign of S: energy-consistent but not objective"),
+    M("planar-locking-element", "forms/planar_beam.py",
+      [('Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]',
+        'Field("Gamma", "DG", k, (2,)), Field("kappa", "DG", k)]')],
+      ["tests/test_planar_beam.py::test_no_shear_locking_slender_cantilever"],
+      "strains in DG_k instead of DG_(k-1): the equal-order (locking) element"),
+    M("planar-degree-ignored", "demos/_planar.py",
+      [('degree=p["degree"])', "degree=1)")],
+      ["tests/test_planar_beam.py::test_roll_up_spatial_order_grows_with_the_degree"],
+      "the planar scenes ignore `degree` (P1 whatever is asked)"),
+    M("planar-effort-not-projected", "forms/planar_beam.py",
+      [("            N, M = Nh, Mh\n", "")],
+      ["tests/test_planar_beam.py::test_higher_degree_keeps_the_balance"],
+      "degree >= 2: pointwise discrete gradient of DG1 strains, not in the test space"),
+    # -- integrators: midpoint and discrete gradient ----------------------------------------------
+    M("dg-midpoint-effort", "rodfem/integrators.py",
+      [('if self.rule == "discrete-gradient":', "if False:")],
+      ["tests/test_planar_beam.py::test_discrete_gradient_exact_for_hyperelastic_midpoint_not",
+       "tests/test_string.py::test_midpoint_breaks_balance_for_logarithmic_not_for_kirchhoff",
+       "tests/test_planar_beam.py::test_no_input_conserves_energy_and_momenta"],
+      "the discrete-gradient branch returns the midpoint effort"),
+    M("dg-no-taylor-term", "rodfem/integrators.py",
+      [("d3W / 24.0)", "0.0 * d3W)")],
+      ["tests/test_planar_beam.py::test_flying_spaghetti_balance_and_momenta_after_load",
+       "tests/test_planar_beam.py::test_discrete_gradient_exact_for_hyperelastic_midpoint_not",
+       "tests/test_string.py::test_discrete_gradient_balance_every_material"],
+      "Taylor term of the discrete gradient set to zero (balance error 8e-10 max|H|)"),
+    M("dg-correction-sign", "rodfem/integrators.py",
+      [("grad = grad + bracket /", "grad = grad - bracket /")],
+      ["tests/test_planar_beam.py::test_no_input_conserves_energy_and_momenta",
+       "tests/test_string.py::test_discrete_gradient_balance_every_material"],
+      "wrong sign of Gonzalez' correction (invisible on quadratic W)"),
+    M("midpoint-is-backward-euler", "rodfem/integrators.py",
+      [("return 0.5 * (self.x0[name] + self.x1[name])", "return self.x1[name]")],
+      ["tests/test_planar_beam.py::test_no_input_conserves_energy_and_momenta",
+       "tests/test_cosserat_rod.py::test_second_order_in_time"],
+      "x_{n+1/2} replaced by x_{n+1}: first order, dissipative"),
+    # -- ports and engine ---------------------------------------------------------------------------
+    M("port-output-at-x1", "rodfem/ports.py",
+      [("return self._pair(step, {n: step.mid(n) for n in step.x0}) * self.measure(dx, ds)",
+        "return self._pair(step, {n: step.x1[n] for n in step.x0}) * self.measure(dx, ds)")],
+      ["tests/test_planar_beam.py::test_flying_spaghetti_balance_and_momenta_after_load",
+       "tests/test_cosserat_rod.py::test_energy_balance_with_inputs"],
+      "port output y taken at x_{n+1} instead of x_{n+1/2}"),
+    M("missing-allreduce", "rodfem/problem.py",
+      [("return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)",
+        "return fem.assemble_scalar(compiled)")],
+      ["tests/test_cli.py::test_mpi_two_ranks_match_serial"],
+      "scalars (H, work, observables) not summed over the ranks"),
+    M("parameter-high-ignored", "rodfem/scene.py",
+      [("bad |= value > self.high", "bad |= False")],
+      ["tests/test_cli.py::test_bad_input_is_one_line"],
+      "the upper bound of a parameter range is not checked"),
+    M("set-without-equals", "rodfem/cli.py",
+      [('        if "=" not in pair:\n'
+        '            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")\n', "")],
+      ["tests/test_cli.py::test_bad_input_is_one_line",
+       "tests/test_cli.py::test_bad_input_from_the_shell_has_no_traceback"],
+      "`--set NAME` without '=' ends in a traceback"),
+    M("study-column-dropped", "rodfem/study.py",
+      [('"max_balance_error_relative", "failure"]', '"max_balance_error_relative"]')],
+      ["tests/test_study.py::test_csv_has_the_documented_columns"],
+      "a documented column of study.csv is no longer written"),
+    # -- 3D Cosserat rod --------------------------------------------------------------------------
+    M("rod3d-non-objective", "forms/cosserat_rod.py",
+      [("ufl.inner(frame(d) * N, dv.dx(0))", "ufl.inner(N, dv.dx(0))"),
+       ("gamma_rate = frame(d).T * v.dx(0)", "gamma_rate = v.dx(0)")],
+      ["tests/test_cosserat_rod.py::test_objectivity_under_a_superposed_rotation"],
+      "spatial stress resultants (R dropped from force and strain rate): energy-consistent, not objective"),
+    M("rod3d-gll-dropped", "forms/cosserat_rod.py",
+      [('    return ufl.Measure("dx", domain=dx.ufl_domain(),\n'
+        '                       metadata={"quadrature_rule": "GLL", "quadrature_degree": 2})',
+        "    return dx")],
+      ["tests/test_cosserat_rod.py::test_free_rod_conserves_energy_momenta_and_orthonormality"],
+      "constraints and kinematics on Gauss points: orthonormality lost at the nodes"),
+    M("rod3d-locking-element", "forms/cosserat_rod.py",
+      [('[Field("N", "DG", 1, v3), Field("M", "DG", 1, v3)', '[Field("N", "DG", 2, v3), Field("M", "DG", 2, v3)')],
+      ["tests/test_cosserat_rod.py::test_cantilever_tip_force_no_locking"],
+      "stress resultants in DG2 with P2 kinematics: the locking (displacement-like) element"),
+    M("rod3d-angular-momentum-no-directors", "forms/cosserat_rod.py",
+      [('L = ufl.cross(x["r"], p) + sum(', 'L = ufl.cross(x["r"], p) + 0 * sum(')],
+      ["tests/test_cosserat_rod.py::test_free_rod_conserves_energy_momenta_and_orthonormality",
+       "tests/test_cosserat_rod.py::test_energy_balance_with_inputs"],
+      "angular momentum without the director (rotary) part"),
+    M("rod3d-moment-pairing-factor", "forms/cosserat_rod.py",
+      [("return 0.5 * sum((ufl.cross(d[i], w[i]) for i in range(3)), ufl.zero(3))",
+        "return 1.0 * sum((ufl.cross(d[i], w[i]) for i in range(3)), ufl.zero(3))")],
+      ["tests/test_cosserat_rod.py::test_roll_up_converges_to_circle"],
+      "end moments act twice as strongly (pairing <m, sum d_i x w_i>): balanced, but wrong"),
+    M("helix-ignores-constraint", "demos/helix_3d.py",
+      [('    if p["constraint"] in ("inextensible", "kirchhoff"):\n        C_N[0] = 0.0\n'
+        '    if p["constraint"] in ("shear-rigid", "kirchhoff"):\n        C_N[1:] = 0.0\n', "")],
+      ["tests/test_cosserat_rod.py::test_kirchhoff_rod_under_a_tip_force_matches_the_elastica",
+       "tests/test_cosserat_rod.py::test_helix_constraint_parameter_zeroes_the_compliances"],
+      "helix-3d ignores its `constraint` parameter"),
+    M("zero-compliance-regularised", "forms/cosserat_rod.py",
+      [("self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))",
+        "self.C_N, self.C_M = (np.maximum(np.asarray(c, dtype=float), 1e-4) for c in (C_N, C_M))")],
+      ["tests/test_cosserat_rod.py::test_kirchhoff_rod_under_a_tip_force_matches_the_elastica",
+       "tests/test_cosserat_rod.py::test_zero_compliance_constrains_strain"],
+      "a zero compliance replaced by a small one (penalty instead of constraint)"),
+    M("rod3d-ramp-not-smooth", "demos/_rod3d.py",
+      [("return value * tau**3 * (10 - 15 * tau + 6 * tau**2)", "return value * tau**2 * (3 - 2 * tau)")],
+      ["tests/test_cosserat_rod.py::test_roll_up_converges_to_circle",
+       "tests/test_cosserat_rod.py::test_helix_fourth_order_and_no_locking"],
+      "cubic load ramp (end acceleration != 0): a load-stepping error at t_end, order 3 instead of 4"),
+    # -- strings --------------------------------------------------------------------------------
+    M("string-strain-rate-factor", "forms/string.py",
+      [('(step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC', '(step.rate("C") - ufl.inner(rs, v.dx(0))) * dC')],
+      ["tests/test_string.py::test_strain_stays_compatible",
+       "tests/test_string.py::test_discrete_gradient_balance_every_material"],
+      "d_t C = d_s r . d_s v instead of 2 d_s r . d_s v"),
+    M("string-end-mass-dropped", "forms/string.py",
+      [("        ends = self._lumped(ds, 0.5 * ufl.inner(x[\"v\"], x[\"v\"]))\n"
+        "        return H + ends if ends is not None else H",
+        "        return H")],
+      ["tests/test_string.py::test_crane_balance_with_end_masses_and_compatibility"],
+      "the kinetic energy of the end masses missing from H"),
+    # -- multibody: joints and rigid bodies ------------------------------------------------------
+    M("joint-reaction-sign", "rodfem/interconnection.py",
+      [("        r_v = G.T @ lam\n", "        r_v = -G.T @ lam\n")],
+      ["tests/test_system.py::test_four_bar_reproduces_the_authors_reference_point",
+       "tests/test_system.py::test_double_pendulum_keeps_link_lengths_to_round_off"],
+      "the joint's reaction enters the momentum rows with the wrong sign (not power-preserving)"),
+    M("joint-constraint-at-x1", "rodfem/interconnection.py",
+      [("        r_lam = G @ vm - dgp / h\n", "        r_lam = (np.einsum(\"kij,j->ki\", self.Q, q1) + self.c) @ vm - dgp / h\n")],
+      ["tests/test_system.py::test_double_pendulum_keeps_link_lengths_to_round_off",
+       "tests/test_slider_crank.py::test_structure_is_preserved"],
+      "velocity constraint with G(q_{n+1}) instead of G(q_{n+1/2}): quadratic constraints drift"),
+    M("driven-joint-work-dropped", "rodfem/interconnection.py",
+      [("-float(lam @ dgp)", "0.0")],
+      ["tests/test_system.py::test_driven_joint_is_an_input_port"],
+      "a driven joint's work -lambda . dg_p missing from the supplied work"),
+    M("joint-rows-dropped-off-rank", "rodfem/system.py",
+      [("        A.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, False)", "        pass")],
+      ["tests/test_system.py::test_four_bar_two_ranks_equal_serial"],
+      "the joints' rows that rank 0 adds for other ranks are dropped (np2 differs or fails)"),
+    M("rigid-body-director-mass", "forms/rigid_body.py",
+      [("+ e * ufl.inner(step.rate(wn), dwi)", "+ 0.5 * e * ufl.inner(step.rate(wn), dwi)")],
+      ["tests/test_system.py::test_rigid_body_spins_with_orthonormal_directors",
+       "tests/test_slider_crank.py::test_agrees_with_the_exact_motion"],
+      "rigid body: the director inertia in the balance differs from the one in H"),
+    M("string-density-per-stretched-length", "forms/string.py",
+      [('+ self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv)',
+        '+ self.constants(dom)["rhoA"] / ufl.sqrt(step.mid("C")) * ufl.inner(step.rate("v"), dv)')],
+      ["tests/test_string.py::test_wave_speed",
+       "tests/test_string.py::test_spatial_order_of_a_vibrating_string"],
+      "inertia with the mass per stretched length rhoA/sqrt(C) where rhoA is per reference length"),
+]
+
+
+# -- running ------------------------------------------------------------------------------------
+
+def copy_tree(dest, ref=None):
+    """The tracked files of the working tree (or of commit `ref`) into `dest`."""
+    if ref:
+        archive = subprocess.run(["git", "-C", REPO, "archive", ref], check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", dest], input=archive, check=True)
+        return
+    files = subprocess.run(["git", "-C", REPO, "ls-files", "-z"], check=True, capture_output=True,
+                           text=True).stdout.split("\0")
+    for f in filter(None, files):
+        src = os.path.join(REPO, f)
+        if os.path.isfile(src):
+            os.makedirs(os.path.dirname(os.path.join(dest, f)), exist_ok=True)
+            shutil.copy2(src, os.path.join(dest, f))
+
+
+def environment(copy):
+    return dict(os.environ, PYTHONPATH=copy + os.pathsep + os.environ.get("PYTHONPATH", ""), OMP_NUM_THREADS="1",
+                OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+
+
+PROBE = """
+import importlib, sys
+from rodfem.scene import load
+mods = [importlib.import_module(m) for m in ("rodfem", "forms", "demos", "rodfem.cli")]
+scene = load("roll-up-2d")
+print("\\n".join([m.__file__ for m in mods] + [sys.modules[scene.build.__module__].__file__]))
+"""
+
+
+def preflight(copy):
+    """Check that the copy's code is what runs: modules, entry-point scenes, console script, mpirun."""
+    env = environment(copy)
+    paths = subprocess.run([PYTHON, "-c", PROBE], cwd=copy, env=env, capture_output=True, text=True, timeout=300)
+    found = paths.stdout.split()
+    # the console script (what the CLI tests run): PYTHONVERBOSE makes Python name every module file it loads
+    console = os.path.join(os.path.dirname(PYTHON), "rodfem")
+    script = subprocess.run([console, "list"], cwd=copy, env=dict(env, PYTHONVERBOSE="1"), capture_output=True,
+                            text=True, timeout=300)
+    cli = [line for line in script.stderr.splitlines()
+           if line.startswith("# code object from") and "rodfem/cli.py" in line]
+    mpirun = shutil.which("mpirun")
+    mpi = subprocess.run(["timeout", "120", mpirun, "-n", "1", PYTHON, "-c", "import forms; print(forms.__file__)"],
+                         cwd=copy, env=env, capture_output=True, text=True) if mpirun else None
+    problems = []
+    if len(found) != 5 or not all(p.startswith(copy) for p in found):
+        problems.append(f"modules/scenes resolve outside the copy: {found or paths.stderr[-500:]}")
+    if not cli or not all(copy in line for line in cli):
+        problems.append(f"console script {console} does not import the copy: {cli or script.stderr[-300:]}")
+    if mpi is not None and not mpi.stdout.strip().startswith(copy):
+        problems.append(f"mpirun children do not import the copy: {mpi.stdout.strip() or mpi.stderr[-300:]}")
+    return problems
+
+
+def apply(mutation, copy):
+    """Replace the mutation's texts in the copy; returns an error message or None."""
+    path = os.path.join(copy, mutation.file)
+    if not os.path.exists(path):
+        return f"{mutation.file} does not exist"
+    text = open(path).read()
+    for old, new in mutation.edits:
+        count = text.count(old)
+        if count != 1:
+            return f"stale: the text to replace occurs {count} times in {mutation.file}: {old[:60]!r}"
+        text = text.replace(old, new)
+    with open(path, "w") as f:
+        f.write(text)
+    # the mutated text really is what Python will import: no stale bytecode beside it
+    shutil.rmtree(os.path.join(os.path.dirname(path), "__pycache__"), ignore_errors=True)
+    return None
+
+
+def failed_tests(junit):
+    """Node ids (file::name[param]) of the failed or erroring test cases in a JUnit XML file."""
+    failed = []
+    if not os.path.exists(junit):
+        return failed
+    for case in ET.parse(junit).getroot().iter("testcase"):
+        if case.find("failure") is not None or case.find("error") is not None:
+            module = case.get("classname", "").replace(".", "/") + ".py"
+            failed.append(f"{module}::{case.get('name')}")
+    return failed
+
+
+def run_one(mutation, ref=None, all_tests=False, timeout=900):
+    """Apply `mutation` to a fresh copy and run its tests; returns a result dict."""
+    copy = tempfile.mkdtemp(prefix=f"rodfem-mut-{mutation.name}-")
+    t0 = time.time()
+    try:
+        copy_tree(copy, ref)
+        error = apply(mutation, copy)
+        if error:
+            return {"status": "stale", "detail": error, "failed": [], "seconds": 0.0}
+        junit = os.path.join(copy, "junit.xml")
+        targets = ["tests"] if all_tests else mutation.tests
+        cmd = [PYTHON, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--rootdir", copy, "-o", "addopts=",
+               f"--junitxml={junit}", *targets]
+        try:
+            p = subprocess.run(cmd, cwd=copy, env=environment(copy), capture_output=True, text=True, timeout=timeout)
+            code, tail = p.returncode, (p.stdout + p.stderr)[-1500:]
+        except subprocess.TimeoutExpired:
+            code, tail = "timeout", ""
+        failed = failed_tests(junit)
+        # 1: some test failed.  Anything else (2: collection error, e.g. a mutation that does not
+        # import; timeout) says nothing about the tests and is reported as an error.
+        status = {0: "survived", 1: "caught"}.get(code, "error")
+        return {"status": status, "failed": failed, "code": code, "detail": "" if status != "error" else tail,
+                "seconds": time.time() - t0}
+    finally:
+        shutil.rmtree(copy, ignore_errors=True)
+
+
+def short(node):
+    return node.replace("tests/", "").replace(".py::", "::")
+
+
+def write_table(results, path, title, command):
+    lines = [f"# {title}", "", f"`{command}`", "",
+             "| mutation | what it breaks | file | result | tests that caught it | time |",
+             "|---|---|---|---|---|---|"]
+    def cell(text):
+        return text.replace("|", "\\|").replace("\n", " ")
+    for m, r in results:
+        caught = "<br>".join(short(t) for t in r["failed"]) or ("–" if r["status"] != "stale" else r["detail"])
+        lines.append(f"| `{m.name}` | {cell(m.what)} | `{m.file}` | **{r['status']}** | {cell(caught)} | "
+                     f"{r['seconds']:.0f} s |")
+    n_caught = sum(r["status"] == "caught" for _, r in results)
+    lines += ["", f"{n_caught} of {len(results)} mutations caught."]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--only", nargs="+", metavar="NAME", help="run these mutations only")
+    ap.add_argument("--list", action="store_true", help="list the mutations and their tests")
+    ap.add_argument("--ref", help="copy this commit instead of the working tree (e.g. main)")
+    ap.add_argument("--all-tests", action="store_true", help="run the whole suite per mutation, not only its tests")
+    ap.add_argument("--out", default=os.path.join(REPO, "benchmarks", "mutations.md"), help="the Markdown table")
+    args = ap.parse_args(argv)
+    chosen = [m for m in MUTATIONS if not args.only or m.name in args.only]
+    if args.only and len(chosen) != len(set(args.only)):
+        ap.error(f"unknown mutation in {args.only}; see --list")
+    if args.list:
+        for m in chosen:
+            print(f"{m.name:38s} {m.file:24s} {m.what}")
+            for t in m.tests:
+                print(f"{'':38s}   {t}")
+        return 0
+    probe = tempfile.mkdtemp(prefix="rodfem-mut-probe-")
+    try:
+        copy_tree(probe, args.ref)
+        problems = preflight(probe)
+    finally:
+        shutil.rmtree(probe, ignore_errors=True)
+    if problems:
+        print("preflight failed, mutations would not take effect:\n  " + "\n  ".join(problems), file=sys.stderr)
+        return 2
+    results, t0 = [], time.time()
+    for m in chosen:
+        r = run_one(m, args.ref, args.all_tests)
+        results.append((m, r))
+        print(f"{m.name:38s} {r['status']:9s} {r['seconds']:6.0f} s  {', '.join(short(t) for t in r['failed'])}"
+              + (f"\n    {r['detail']}" if r["status"] in ("stale", "error") else ""), flush=True)
+    command = "benchmarks/mutations.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    title = f"Mutation check ({'tests of ' + args.ref if args.ref else 'working tree'}"
+    title += f", {'whole suite' if args.all_tests else 'listed tests'} per mutation, {time.time() - t0:.0f} s)"
+    write_table(results, args.out, title, command.strip())
+    bad = [m.name for m, r in results if r["status"] != "caught"]
+    print(f"\n{len(results) - len(bad)} of {len(results)} caught" + (f"; NOT caught: {', '.join(bad)}" if bad else "")
+          + f"  ({time.time() - t0:.0f} s, table in {args.out})")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

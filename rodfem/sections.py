@@ -1,0 +1,86 @@
+"""Surfaces of bodies for pictures (numbers only): a section swept along a centreline, a box.
+
+A rod's section is a rectangle of width `width` along d2 and height `width`/2 along d3, placed
+at every ring (a node of the centreline) and oriented by the directors there, so that bending,
+shear and twist show on the surface itself.  A string, which has no section frame, gets a round
+tube oriented by a rotation-minimizing frame.  A rigid body is a box along its directors.
+Polygons are quads between consecutive rings (and a cap at each end of a rod), wound so that
+their normals point outwards.
+"""
+import numpy as np
+
+RECTANGLE = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]]) * 0.5   # (d2, d3) corners
+CIRCLE_SIDES = 12
+
+
+def section_points(width, height, round_):
+    """(m, 2) section coordinates along (d2, d3): a width x height rectangle or a round section."""
+    if round_:
+        a = 2 * np.pi * np.arange(CIRCLE_SIDES) / CIRCLE_SIDES
+        return 0.5 * np.column_stack([width * np.cos(a), height * np.sin(a)])
+    return RECTANGLE * [width, height]
+
+
+def sweep(centre, e2, e3, section, caps=True):
+    """Points (rings * m, 3) and quads of `section` (m, 2) swept along `centre` (rings, 3) with section
+    axes e2, e3 (rings, 3) at every ring; caps close both ends.  Returns (points, polys)."""
+    n, m = len(centre), len(section)
+    a, b = section[None, :, 0, None], section[None, :, 1, None]
+    points = centre[:, None, :] + a * e2[:, None, :] + b * e3[:, None, :]
+    i = np.arange(n - 1)[:, None] * m
+    j = np.arange(m)[None, :]
+    jn = (j + 1) % m
+    quads = np.stack([i + j, i + jn, i + m + jn, i + m + j], axis=-1).reshape(-1, 4)
+    polys = list(quads)
+    if caps and n > 1:
+        polys = [np.arange(m)[::-1]] + polys + [(n - 1) * m + np.arange(m)]
+    return points.reshape(-1, 3), polys
+
+
+def rotation_minimizing(centre):
+    """Section axes (e2, e3) along a polyline without a frame of its own (a string): the double
+    reflection method (Wang et al. 2008) from a normal to the first tangent."""
+    t = np.gradient(centre, axis=0) if len(centre) > 1 else np.array([[1.0, 0.0, 0.0]])
+    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-300)
+    e2 = np.empty_like(t)
+    ref = np.eye(3)[np.argmin(np.abs(t[0]))]
+    e2[0] = np.cross(t[0], ref)
+    e2[0] /= np.linalg.norm(e2[0])
+    for i in range(len(t) - 1):
+        v1 = centre[i + 1] - centre[i]
+        c1 = v1 @ v1
+        if c1 == 0:
+            e2[i + 1] = e2[i]
+            continue
+        rL = e2[i] - 2 / c1 * (v1 @ e2[i]) * v1
+        tL = t[i] - 2 / c1 * (v1 @ t[i]) * v1
+        v2 = t[i + 1] - tL
+        c2 = v2 @ v2
+        e2[i + 1] = rL - 2 / c2 * (v2 @ rL) * v2 if c2 > 0 else rL
+    e3 = np.cross(t, e2)
+    return e2, e3
+
+
+def box(centre, frame, edges):
+    """Points (24, 3) and 6 quads of a box centred at `centre` with axes the columns of `frame`
+    (3, 3) and edge lengths `edges` (3,): four points per face, so that each face is flat-shaded."""
+    corners = np.array([[i, j, k] for i in (-0.5, 0.5) for j in (-0.5, 0.5) for k in (-0.5, 0.5)])
+    pts = centre + (corners * edges) @ np.asarray(frame).T
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    points = np.concatenate([pts[list(f)] for f in faces])
+    return points, [np.arange(4 * q, 4 * q + 4) for q in range(6)]
+
+
+def box_edges(centre, frame, edges):
+    """The 12 edges of that box as segments (12, 2, 3) (for line drawings)."""
+    corners = np.array([[i, j, k] for i in (-0.5, 0.5) for j in (-0.5, 0.5) for k in (-0.5, 0.5)])
+    pts = centre + (corners * edges) @ np.asarray(frame).T
+    pairs = [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
+    return np.array([[pts[a], pts[b]] for a, b in pairs])
+
+
+def stride(n, most):
+    """Indices 0 = i_0 < ... < i_m = n - 1 of at most `most` + 1 evenly spread rings of n nodes."""
+    if n <= most + 1:
+        return np.arange(n)
+    return np.unique(np.linspace(0, n - 1, most + 1).round().astype(int))

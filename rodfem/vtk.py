@@ -1,0 +1,138 @@
+"""VTK XML files written with numpy and the standard library: PolyData (.vtp) and time series (.pvd).
+
+A .vtp piece holds points and any of vertices, polylines and polygons, with point and cell data;
+arrays are inline binary (base64 of a UInt64 byte count followed by the little-endian values), the
+encoding VTK and ParaView read without an extension and that `read_vtp` (below, for tests and
+scripts) reads back.  Arrays may name their components (ComponentName0, ...: ParaView shows them).
+The bytes depend on the values only: the same state gives the same file on any number of ranks.
+"""
+import base64
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+_TYPES = {np.dtype("float64"): "Float64", np.dtype("float32"): "Float32", np.dtype("int64"): "Int64",
+          np.dtype("int32"): "Int32", np.dtype("uint8"): "UInt8"}
+_DTYPES = {v: k for k, v in _TYPES.items()}
+
+
+@dataclass
+class Array:
+    """A data array: values (n,) or (n, components), optional component names."""
+    values: np.ndarray
+    components: tuple = ()
+
+
+@dataclass
+class PolyData:
+    """points (n, 3); verts, lines, polys: lists of index arrays (one per cell, in that VTK order);
+    point_data, cell_data: dict name -> Array (cell data in the order verts, lines, polys)."""
+    points: np.ndarray
+    verts: list = field(default_factory=list)
+    lines: list = field(default_factory=list)
+    polys: list = field(default_factory=list)
+    point_data: dict = field(default_factory=dict)
+    cell_data: dict = field(default_factory=dict)
+
+
+def _encode(values):
+    data = np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False).tobytes()
+    return base64.b64encode(np.uint64(len(data)).tobytes() + data)
+
+
+def _array(name, arr, components=(), indent=8):
+    """The bytes of one DataArray element."""
+    values = np.asarray(arr)
+    if values.dtype.kind == "f":
+        values = values.astype(np.float64, copy=False)
+    elif values.dtype.kind in "iu" and values.dtype not in _TYPES:
+        values = values.astype(np.int64)
+    ncomp = 1 if values.ndim == 1 else values.shape[1]
+    attrs = {"type": _TYPES[values.dtype], "NumberOfComponents": str(ncomp), "format": "binary"}
+    if name:
+        attrs["Name"] = name
+    for i, c in enumerate(components[:ncomp] if ncomp > 1 else ()):
+        attrs[f"ComponentName{i}"] = str(c)
+    head = " ".join(f'{k}={quoteattr(v)}' for k, v in attrs.items())
+    return b" " * indent + f"<DataArray {head}>".encode() + _encode(values) + b"</DataArray>\n"
+
+
+def _cells(tag, cells):
+    sizes = np.array([len(c) for c in cells], dtype=np.int64)
+    conn = np.concatenate(cells).astype(np.int64) if cells else np.zeros(0, np.int64)
+    return (f"      <{tag}>\n".encode() + _array("connectivity", conn) + _array("offsets", np.cumsum(sizes))
+            + f"      </{tag}>\n".encode())
+
+
+def write_vtp(path, poly):
+    """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
+    parts = [b'<?xml version="1.0" encoding="utf-8"?>\n'
+             b'<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
+             b"  <PolyData>\n",
+             f'    <Piece NumberOfPoints="{len(poly.points)}" NumberOfVerts="{len(poly.verts)}" '
+             f'NumberOfLines="{len(poly.lines)}" NumberOfStrips="0" NumberOfPolys="{len(poly.polys)}">\n'.encode()]
+    for tag, data in (("PointData", poly.point_data), ("CellData", poly.cell_data)):
+        parts.append(f"      <{tag}>\n".encode())
+        parts += [_array(name, a.values, a.components) for name, a in data.items()]
+        parts.append(f"      </{tag}>\n".encode())
+    parts += [b"      <Points>\n", _array("", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3)),
+              b"      </Points>\n"]
+    parts += [_cells(tag, cells) for tag, cells in (("Verts", poly.verts), ("Lines", poly.lines), ("Strips", []),
+                                                    ("Polys", poly.polys))]
+    parts.append(b"    </Piece>\n  </PolyData>\n</VTKFile>\n")
+    with open(path, "wb") as f:
+        f.write(b"".join(parts))
+
+
+def write_pvd(path, datasets):
+    """A time series: datasets = [(t, part, file, name)], one entry per time and part (block)."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1")
+    coll = ET.SubElement(root, "Collection")
+    for t, part, file, name in datasets:
+        attrs = {"timestep": repr(float(t)), "part": str(part), "file": file}
+        if name:
+            attrs["name"] = name
+        ET.SubElement(coll, "DataSet", attrs)
+    ET.indent(root) if hasattr(ET, "indent") else None
+    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+
+
+# -- reading back (tests, scripts) ---------------------------------------------------------
+
+def _decode(el):
+    raw = base64.b64decode(el.text.strip()) if el.text else b""
+    if el.get("format") != "binary":
+        raise ValueError("read_vtp reads the binary arrays write_vtp writes")
+    n = int(np.frombuffer(raw[:8], dtype="<u8")[0])
+    values = np.frombuffer(raw[8:8 + n], dtype=_DTYPES[el.get("type")].newbyteorder("<"))
+    ncomp = int(el.get("NumberOfComponents", "1"))
+    values = values.reshape(-1, ncomp) if ncomp > 1 else values
+    comps = tuple(el.get(f"ComponentName{i}") for i in range(ncomp) if el.get(f"ComponentName{i}") is not None)
+    return Array(values.copy(), comps)
+
+
+def read_vtp(path):
+    """The PolyData of a file written by `write_vtp`."""
+    piece = ET.parse(path).getroot().find("PolyData/Piece")
+    out = PolyData(points=_decode(piece.find("Points/DataArray")).values)
+    for tag, attr in (("Verts", "verts"), ("Lines", "lines"), ("Polys", "polys")):
+        el = piece.find(tag)
+        if el is None:
+            continue
+        arrays = {a.get("Name"): _decode(a).values for a in el.findall("DataArray")}
+        ends = arrays["offsets"]
+        starts = np.concatenate([[0], ends[:-1]]).astype(int)
+        setattr(out, attr, [arrays["connectivity"][a:b] for a, b in zip(starts, ends)])
+    for tag, attr in (("PointData", "point_data"), ("CellData", "cell_data")):
+        for a in piece.findall(f"{tag}/DataArray"):
+            getattr(out, attr)[a.get("Name")] = _decode(a)
+    return out
+
+
+def read_pvd(path):
+    """[(t, part, file, name)] of a .pvd file."""
+    root = ET.parse(path).getroot()
+    return [(float(d.get("timestep")), int(d.get("part", 0)), d.get("file"), d.get("name", ""))
+            for d in root.iter("DataSet")]

@@ -1,0 +1,268 @@
+"""What a run writes for a rod user (issue 15): the files are read back (rodfem.vtk.read_vtp, the
+standard library's XML) and checked against the model's own values, not against the writer's code.
+
+- centreline/: one polyline per body through the nodes in order of s; its points are the state's;
+- surface/: the section's corners at every node are r + a d2 + b d3 with the exported directors;
+- the strains and stress resultants are the model's: the state's Gamma, kappa (planar), the
+  compatible strains at t = 0, N = dW/dGamma; the 3D rod's Gamma, K of its configuration, the
+  helix's exact curvature and end moment; a string's stretch |d_s r|;
+- frames: the promised number, t = 0 and t_end, the last frame at the history's tip;
+- animation.gif has one picture per frame; a massless scene writes no velocities;
+- `mpirun -n 2` writes the serial bytes for the same state (and the serial values to round-off later).
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from rodfem import Problem
+from rodfem.output import OutDir, RunWriter
+from rodfem.scene import load
+from rodfem.sections import RECTANGLE
+from rodfem.timeloop import run, steps_for
+from rodfem.vtk import read_pvd, read_vtp
+
+COMM = MPI.COMM_WORLD
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def write_run(problem, out, dt, t_end, frames, section=0.0):
+    """Run `problem` with a RunWriter into `out` (what `rodfem run` does, keeping the problem)."""
+    od = OutDir(str(out), COMM)
+    with od.claimed({}):
+        writer = RunWriter(od, problem, steps_for(dt, t_end), frames, section)
+        result = run(problem, dt, t_end, writer=writer)
+        writer.finish({}, result)
+    return result
+
+
+def scene_run(name, out, **overrides):
+    scene = load(name)
+    p = scene.values(overrides)
+    problem = scene.build(p, COMM)
+    return problem, write_run(problem, out, p["dt"], p["t_end"], p["frames"], p["section"]), p
+
+
+def series(out, kind="centreline"):
+    """[(t, part, PolyData, name)] of a .pvd."""
+    return [(t, part, read_vtp(os.path.join(out, f)), name)
+            for t, part, f, name in read_pvd(os.path.join(out, kind + ".pvd"))]
+
+
+def gif_frames(path):
+    from PIL import Image
+    with Image.open(path) as im:
+        return im.n_frames
+
+
+def corners(centre, d2, d3, width):
+    """The section's corners (nodes, 4, 3) the surface must have: r + a d2 + b d3."""
+    ab = RECTANGLE * [width, width / 2]
+    return centre[:, None, :] + ab[None, :, 0, None] * d2[:, None, :] + ab[None, :, 1, None] * d3[:, None, :]
+
+
+# -- the planar beam ---------------------------------------------------------------------------------
+
+R_ARC, L_ARC, N_ARC = 2.0, 3.0, 6
+
+
+def arc_beam():
+    """A free planar beam bent into a circular arc (radius 2) at rest, with compatible strains: it
+    springs open.  Gamma(0) = A(phi_m)^T (chord / h) - e1 cell by cell (nonzero), kappa = 1/R."""
+    from forms.planar_beam import PlanarBeam, quadratic
+    beam = PlanarBeam(1.0, 0.1, quadratic(EA=100.0, GA=50.0, EI=2.0))
+    initial = {"r": lambda x: np.vstack([R_ARC * np.sin(x[0] / R_ARC), R_ARC * (1 - np.cos(x[0] / R_ARC))]),
+               "phi": lambda x: x[0] / R_ARC}
+    return Problem(beam, L_ARC, N_ARC, initial=initial, comm=COMM)
+
+
+def test_planar_beam_polyline_surface_strains_and_frames(tmp_path):
+    problem = arc_beam()
+    result = write_run(problem, tmp_path, 0.01, 0.3, frames=4, section=0.1)
+    frames = series(tmp_path)
+    times = [t for t, *_ in frames]
+    assert len(frames) == 4 and times[0] == 0.0 and times[-1] == result.rows[-1]["t"] == pytest.approx(0.3)
+    assert len(os.listdir(tmp_path / "centreline")) == len(os.listdir(tmp_path / "surface")) == 4
+    assert gif_frames(tmp_path / "animation.gif") == 4
+    h = L_ARC / N_ARC
+    for k, (t, _, c, _) in enumerate(frames):
+        # one polyline through the nodes in order
+        assert len(c.lines) == 1 and list(c.lines[0]) == list(range(N_ARC + 1)) and not c.verts
+        s = c.point_data["s"].values
+        assert np.allclose(s, h * np.arange(N_ARC + 1), rtol=0, atol=1e-14)
+        r, phi = c.points[:, :2], c.point_data["phi"].values
+        assert np.all(c.points[:, 2] == 0.0)
+        chord = (r[1:] - r[:-1]) / h
+        pm = 0.5 * (phi[1:] + phi[:-1])
+        # the surface: a 0.1 x 0.05 box section turned by phi, caps at both ends
+        surf = read_vtp(tmp_path / "surface" / f"frame_{k:05d}.vtp")
+        d2 = np.column_stack([-np.sin(phi), np.cos(phi), 0 * phi])
+        d3 = np.tile([0.0, 0.0, 1.0], (len(phi), 1))
+        assert np.max(np.abs(surf.points.reshape(-1, 4, 3) - corners(c.points, d2, d3, 0.1))) <= 1e-14
+        assert len(surf.polys) == 4 * N_ARC + 2
+        G_cells = surf.cell_data["Gamma"].values[1:-1:4]       # one value per element (4 sides each)
+        kappa_cells = surf.cell_data["kappa"].values[1:-1:4]
+        assert surf.cell_data["Gamma"].components == ("axial", "shear")
+        if k == 0:   # compatible strains as the model sets them: Gamma = A(phi_m)^T d_s r - e1, kappa = d_s phi
+            A_T = np.stack([np.column_stack([np.cos(pm), np.sin(pm)]), np.column_stack([-np.sin(pm), np.cos(pm)])], 1)
+            G = np.einsum("nij,nj->ni", A_T, chord) - [1.0, 0.0]
+            assert np.max(np.abs(G_cells - G)) <= 1e-13 and np.max(np.abs(G[:, 0])) > 1e-3
+            assert np.max(np.abs(kappa_cells - np.diff(phi) / h)) <= 1e-13
+            assert np.allclose(kappa_cells, 1 / R_ARC, rtol=1e-12)
+        # the centreline's nodal values: exact inside, the two elements' mean at an inner node
+        Gn = c.point_data["Gamma"].values
+        assert np.allclose(Gn[1:-1], 0.5 * (G_cells[1:] + G_cells[:-1]), rtol=0, atol=1e-15)
+        assert np.allclose(Gn[[0, -1]], G_cells[[0, -1]], rtol=0, atol=1e-15)
+        # the stress resultants of the quadratic material: N = (EA, GA) Gamma, M = EI kappa
+        N, M = surf.cell_data["N"].values[1:-1:4], surf.cell_data["M"].values[1:-1:4]
+        assert np.allclose(N, G_cells * [100.0, 50.0], rtol=1e-13, atol=1e-15)
+        assert np.allclose(M, 2.0 * kappa_cells, rtol=1e-13)
+    # the last frame is the state: nodes, the state's Gamma (DG0 dofs), the history's tip
+    S = problem.space
+    assert np.array_equal(c.points[:, :2], S.nodal(problem.x0, "r")[1])
+    V, dofs = S.collapse("Gamma")
+    order = np.argsort(V.tabulate_dof_coordinates()[:, 0])
+    assert np.array_equal(G_cells, problem.x0.x.array[dofs].reshape(-1, 2)[order])
+    assert c.points[-1, 0] == pytest.approx(result.rows[-1]["tip_x"], abs=1e-12)
+    assert c.points[-1, 1] == pytest.approx(result.rows[-1]["tip_y"], abs=1e-12)
+    fields = json.loads((tmp_path / "fields.json").read_text())["bodies"]["body"]
+    assert fields["model"] == "PlanarBeam" and fields["centreline point data"]["N"]["components"] == ["axial", "shear"]
+    assert set(fields["surface cell data"]) == {"Gamma", "kappa", "N", "M"} and "omitted" not in fields
+    assert "v" in c.point_data and c.point_data["v"].values.shape == (N_ARC + 1, 3)
+
+
+# -- the 3D rod: the helix (statics, zero densities) ------------------------------------------------------
+
+def test_helix_strains_moments_surface_and_no_velocities(tmp_path):
+    import demos.helix_3d as helix
+    problem, result, p = scene_run("helix-3d", tmp_path, frames=3, section=1.0)
+    frames = series(tmp_path)
+    assert [t for t, *_ in frames] == [0.0, 0.5, 1.0] and gif_frames(tmp_path / "animation.gif") == 3
+    c = frames[-1][2]
+    n = 2 * p["n_elements"] + 1                  # P2 nodes
+    assert len(c.lines) == 1 and list(c.lines[0]) == list(range(n))
+    assert np.all(np.diff(c.point_data["s"].values) > 0)
+    assert np.allclose(c.points[-1], [result.rows[-1][f"tip_{x}"] for x in "xyz"], rtol=0, atol=1e-9)
+    # no inertia: the velocities are not written (said so in fields.json)
+    for name in ("v", "w1", "w2", "w3"):
+        assert name not in c.point_data
+    fields = json.loads((tmp_path / "fields.json").read_text())["bodies"]["body"]
+    assert set(fields["omitted"]) == {"v", "w1", "w2", "w3"}
+    assert fields["centreline point data"]["lam"]["components"] == ["11", "22", "33", "12", "13", "23"]
+    d = [c.point_data[f"d{i}"].values for i in (1, 2, 3)]
+    # Gamma, K of the configuration at the elements' middle nodes, from the exported points and directors
+    h = helix.LENGTH / p["n_elements"]
+    mid = np.arange(1, n, 2)
+    rs = (c.points[mid + 1] - c.points[mid - 1]) / h                    # d_s r of P2 at the middle node
+    ds = [(di[mid + 1] - di[mid - 1]) / h for di in d]
+    Gamma = np.column_stack([np.sum(d[i][mid] * rs, axis=1) for i in range(3)]) - [1.0, 0.0, 0.0]
+    K = np.column_stack([0.5 * (np.sum(ds[j] * d[k][mid], 1) - np.sum(ds[k] * d[j][mid], 1))
+                         for j, k in ((1, 2), (2, 0), (0, 1))])
+    assert np.max(np.abs(c.point_data["Gamma"].values[mid] - Gamma)) <= 1e-12
+    assert np.max(np.abs(c.point_data["K"].values[mid] - K)) <= 1e-12
+    # the exact helix: K = (torsion, 0, curvature) = (c kappa, 0, kappa); M = the end moment (EI = 1 units)
+    exact = np.array([helix.C * helix.KAPPA, 0.0, helix.KAPPA])
+    assert np.max(np.abs(K - exact)) <= 0.03 * helix.KAPPA              # 16 elements: 2 %
+    M = c.point_data["M"].values
+    assert np.max(np.abs(M - exact)) <= 5e-3 * helix.KAPPA and np.max(np.ptp(M, axis=0)) <= 1e-5
+    # the state's N, M (DG1): at the middle node the mean of the element's two end values
+    S = problem.space
+    V, dofs = S.collapse("M")
+    xs = V.tabulate_dof_coordinates()[:, 0]
+    vals = problem.x0.x.array[dofs].reshape(-1, 3)
+    mids = np.array([vals[V.dofmap.cell_dofs(e)].mean(axis=0) for e in range(p["n_elements"])])
+    centres = np.array([xs[V.dofmap.cell_dofs(e)].mean() for e in range(p["n_elements"])])
+    assert np.max(np.abs(M[mid] - mids[np.argsort(centres)])) <= 1e-14
+    # the surface: the 1.0 x 0.5 section at every node, turned with the exported d2, d3
+    surf = read_vtp(tmp_path / "surface" / "frame_00002.vtp")
+    assert np.max(np.abs(surf.points.reshape(-1, 4, 3) - corners(c.points, d[1], d[2], 1.0))) <= 1e-12
+    assert set(surf.cell_data) == {"Gamma", "K", "N", "M"} and len(surf.polys) == 4 * (n - 1) + 2
+    assert set(surf.point_data) == {"s"}
+
+
+# -- a system: a string and a rigid body ------------------------------------------------------------
+
+def test_crane_payload_parts_rigid_box_and_string_tube(tmp_path):
+    problem, result, p = scene_run("crane-payload", tmp_path, t_end=0.2, frames=3)
+    for kind in ("centreline", "surface"):
+        parts = read_pvd(tmp_path / f"{kind}.pvd")
+        assert [(t, part, name) for t, part, _, name in parts] == [
+            (t, k, name) for t in (0.0, 0.1, 0.2) for k, name in enumerate(("cable", "payload"))]
+    assert gif_frames(tmp_path / "animation.gif") == 3
+    frames = series(tmp_path)
+    cable, box = frames[-2][2], frames[-1][2]
+    # the payload: one vertex at its centre with its directors; its box along them, edges from m, J
+    assert len(box.verts) == 1 and len(box.points) == 1 and not box.lines
+    R = np.column_stack([box.point_data[f"d{i}"].values[0] for i in (1, 2, 3)])
+    assert np.allclose(R.T @ R, np.eye(3), atol=1e-12)
+    payload = problem.body("payload")
+    edges = np.array(payload.model.box())
+    surf = read_vtp(tmp_path / "surface" / "frame_00002_payload.vtp")
+    assert len(surf.polys) == 6 and len(surf.points) == 24
+    local = (surf.points - box.points[0]) @ R                             # corners in the body frame
+    assert np.allclose(np.abs(local), edges / 2, rtol=1e-12)
+    J = np.array([np.sum(edges ** 2) - e ** 2 for e in edges]) * payload.model.parameters.values["m"] / 12
+    assert np.allclose(np.sort(J), np.sort(np.array(payload.model.E).sum() - payload.model.E), rtol=1e-12)
+    # the cable: a polyline of its P1 nodes, a round tube, the stretch |d_s r| cell by cell
+    assert len(cable.lines) == 1 and len(cable.points) == p["n_elements"] + 1
+    tube = read_vtp(tmp_path / "surface" / "frame_00002_cable.vtp")
+    rings = tube.points.reshape(len(cable.points), -1, 3)
+    radius = np.linalg.norm(rings - cable.points[:, None, :], axis=2)
+    assert np.allclose(radius, radius[0, 0], rtol=1e-12)
+    h = p["L"] / p["n_elements"]
+    m = rings.shape[1]
+    stretch = tube.cell_data["stretch"].values[::m]
+    assert np.allclose(stretch, np.linalg.norm(np.diff(cable.points, axis=0), axis=1) / h, rtol=1e-10)
+    assert np.all(tube.cell_data["tension"].values > 0)
+
+
+# -- the command line: frames, pictures ------------------------------------------------------------------
+
+def test_run_writes_frames_surface_animation(tmp_path):
+    from rodfem.cli import main
+    assert main(["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=1.5",
+                 "--set", "frames=6", "--quiet", "--out", str(tmp_path)]) == 0
+    for kind in ("centreline", "surface"):
+        times = [t for t, *_ in read_pvd(tmp_path / f"{kind}.pvd")]
+        assert len(times) == 6 and times[0] == 0.0 and times[-1] == pytest.approx(1.5)
+    assert gif_frames(tmp_path / "animation.gif") == 6
+    for name in ("shapes.png", "energy.png", "fields.json"):
+        assert (tmp_path / name).stat().st_size > 1000
+
+
+# -- serial and two ranks ----------------------------------------------------------------------------------
+
+@pytest.mark.mpi
+def test_two_ranks_write_the_serial_bytes(tmp_path):
+    exe = os.path.join(os.path.dirname(sys.executable), "rodfem")
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    args = ["run", "flying-spaghetti-3d", "--set", "variant=spatial", "--set", "n_elements=6", "--set", "t_end=1",
+            "--set", "frames=3", "--quiet"]
+    serial = subprocess.run([exe, *args, "--out", str(tmp_path / "s")], capture_output=True, text=True, env=env,
+                            cwd=REPO, timeout=300)
+    par = subprocess.run(["timeout", "300", shutil.which("mpirun"), "--allow-run-as-root", "-n", "2", exe, *args,
+                          "--out", str(tmp_path / "p")], capture_output=True, text=True, env=env, cwd=REPO, timeout=320)
+    assert serial.returncode == 0 and par.returncode == 0, par.stderr[-2000:]
+    names = [os.path.join(d, f) for d in ("centreline", "surface") for f in sorted(os.listdir(tmp_path / "s" / d))]
+    assert len(names) == 6
+    # the initial state is the same on both: so are the bytes (the writer does not see the partition)
+    for name in ["centreline/frame_00000.vtp", "surface/frame_00000.vtp", "centreline.pvd", "surface.pvd",
+                 "fields.json"]:
+        assert (tmp_path / "s" / name).read_bytes() == (tmp_path / "p" / name).read_bytes(), name
+    # after steps the two states differ by the linear solver's round-off (1e-16 in r, 1e-13 in lambda)
+    for name in names:
+        a, b = read_vtp(tmp_path / "s" / name), read_vtp(tmp_path / "p" / name)
+        assert [list(c) for c in a.lines + a.polys] == [list(c) for c in b.lines + b.polys]
+        assert np.max(np.abs(a.points - b.points)) <= 1e-14, name
+        for data in ("point_data", "cell_data"):
+            x, y = getattr(a, data), getattr(b, data)
+            assert list(x) == list(y)
+            for k in x:
+                assert np.allclose(x[k].values, y[k].values, rtol=1e-11, atol=1e-11), (name, k)
+    assert gif_frames(tmp_path / "p" / "animation.gif") == 3
