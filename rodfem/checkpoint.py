@@ -39,6 +39,7 @@ from types import SimpleNamespace
 import numpy as np
 from mpi4py import MPI
 
+from .newton import LU_CHAIN, lu_name
 from .scene import ParameterError
 
 FORMAT = 1
@@ -217,7 +218,7 @@ def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
     info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=n * dt, dt=dt, H=H, supplied=supplied,
                 dissipated=dissipated,
                 has_previous=previous is not None, mpi_ranks=comm.size,
-                linear_solver=problem.newton.settings.get("pc_factor_mat_solver_type"))
+                linear_solver=lu_name(problem.newton.settings))
     if hasattr(out, "do"):
         out.do("write the checkpoint", _write, out.path, info, data)
     elif comm.rank == 0:
@@ -339,8 +340,8 @@ def restore(problem, meta, arrays):
         problem.x0.x.array[:] = x
         problem.x1.x.array[:] = x
     solver = meta.get("linear_solver")    # a switch after a zero pivot (same number of ranks only)
-    if solver and meta.get("mpi_ranks") == comm.size and solver != problem.newton.settings.get("pc_factor_mat_solver_type"):
-        problem.newton.settings["pc_factor_mat_solver_type"] = solver
+    if solver in LU_CHAIN and meta.get("mpi_ranks") == comm.size and solver != lu_name(problem.newton.settings):
+        problem.newton.use_lu(solver)
         fresh_newton(problem)
     comm.Barrier()
     problem.t = float(meta["t"])

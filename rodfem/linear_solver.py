@@ -30,7 +30,8 @@ columns) with its interface rows replaced by identity rows, M = [[A_II, A_IG], [
 M [y; 0] = [b_I; 0] gives y = A_II^{-1} b_I and M z = e_g gives z = [-Z e_g; e_g].
 
 The local LU is PETSc's own (ordering `-rodfem_schur_ordering`, default rcm); a zero pivot
-(a saddle point: multipliers) switches it, for the rest of the run, to sequential MUMPS,
+(a saddle point: multipliers) switches it, for the rest of the run, to PETSc's LU in AMD order
+(as in serial: rodfem/newton.py's LU_CHAIN), and a zero pivot there to sequential MUMPS,
 which pivots (not SuperLU as in serial: MUMPS solves the interface columns of Z together,
 3x faster than one by one, which outweighs its slower factorization: on the 3D rod, 30
 interface columns cost more than the factorization; and SuperLU's 32-bit memory index runs
@@ -48,7 +49,8 @@ from petsc4py import PETSc
 
 from . import petsc_raw
 
-INTERIOR_SOLVERS = ("petsc", "superlu", "mumps")
+INTERIOR_SOLVERS = ("petsc", "petsc-amd", "superlu", "mumps")
+FOLLOWING = {"petsc": "petsc-amd", "petsc-amd": "mumps", "superlu": "mumps"}   # after a zero pivot
 _LIVE = weakref.WeakSet()
 
 
@@ -89,7 +91,7 @@ class InterfaceSchur:
 
     def __init__(self):
         self.pattern = None       # nonzero count the interface was computed for
-        self.solver = "petsc"     # local LU: petsc -> superlu on a zero pivot
+        self.solver = "petsc"     # local LU: petsc -> petsc-amd -> mumps on zero pivots
         self.ordering = "rcm"
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
@@ -221,9 +223,11 @@ class InterfaceSchur:
         self.ksp.setType("preonly")
         pc = self.ksp.getPC()
         pc.setType("lu")
-        pc.setFactorSolverType(self.solver)
+        pc.setFactorSolverType(self.solver.split("-")[0])
         if self.solver == "petsc":
             pc.setFactorOrdering(self.ordering)
+        elif self.solver == "petsc-amd":
+            pc.setFactorOrdering("amd")
         elif self.solver == "mumps":   # sequential MUMPS on this rank's block
             from .newton import mumps_options
             prefix = "rodfem_schur_local_"
@@ -296,7 +300,7 @@ class InterfaceSchur:
         return True
 
     def _local_lu(self, D):
-        """LU of the local block (collective: all ranks agree); PETSc's -> SuperLU on a zero pivot."""
+        """LU of the local block (collective: all ranks agree); the next of FOLLOWING on a zero pivot."""
         while True:
             self.ksp.setOperators(D)
             pc = self.ksp.getPC()
@@ -309,10 +313,9 @@ class InterfaceSchur:
                 ok = False
             if self.comm.allreduce(ok, op=MPI.LAND):
                 return True
-            following = {"petsc": "mumps", "superlu": "mumps"}   # (superlu: chosen by the user)
-            if self.solver not in following:
+            if self.solver not in FOLLOWING:   # (superlu: chosen by the user)
                 return False
-            self.solver = following[self.solver]
+            self.solver = FOLLOWING[self.solver]
             self._make_ksp()
 
     def _fall_back(self, pc):
