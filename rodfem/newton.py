@@ -41,14 +41,16 @@ DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",
 # exact elimination over the rank interfaces of rodfem/linear_solver.py.
 SERIAL = {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"}
 PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.linear_solver.InterfaceSchur"}
-# Large systems (>= LARGE unknowns) reuse the Jacobian and its factorization for two Newton
-# iterations, the count going on across steps (a model's own options win, e.g. the 3D rod's
-# lag 8): the factorization is most of the cost there, and every one costs the parallel
-# solver its interface solves too.  Measured on flying-spaghetti-2d at 10^5 elements: 4.2
-# instead of 3 iterations per step, 2.1 instead of 3 factorizations, 19 % less time per step
-# in serial, the same energy-balance error (1e-12).  A step this fails repeats with full Newton.
-LARGE = 100_000
-LARGE_SETTINGS = {"snes_lag_jacobian": 2, "snes_lag_jacobian_persists": True}
+# Large systems (>= LARGE unknowns) reuse the Jacobian and its factorization for five Newton
+# iterations, the count going on across steps (a model's own options win, e.g. the 3D rod's lag
+# 8): there the factorization is most of the cost, and every one costs the parallel solver its
+# interface solves too.  Measured on flying-spaghetti-2d (dt = 0.1, serial / mpirun -n 2, ms per
+# step): 10^4 elements full Newton 98 / 86 (3 iterations), lag 2 74 / 57, lag 3 53 / 42, lag 5
+# 43 / 32 (5 iterations, one factorization a step); 10^5 elements 930 / 839, 711 / 472, 532 / 368,
+# 465 / 297; the energy balance unchanged (Newton's tolerance).  A step this fails repeats with
+# full Newton.
+LARGE = 10_000
+LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
 # The LUs to try, in order, each after the previous one met a zero pivot (name: PETSc options).
 # PETSc's own LU does not pivot: in RCM order a multiplier (the 3D rod's collocated constraints,
 # joints) is a zero pivot; in AMD order the dofs it couples come first and give it a pivot.
@@ -155,9 +157,11 @@ class FormAssembler:
         with b.localForm() as bl:
             bl.set(0.0)
         fpetsc.assemble_vector(b, self.F)
-        fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.vector], scale=-1.0)
+        if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
+            fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.vector], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(b, self.bcs, self.vector, -1.0)
+        if self.bcs:
+            fpetsc.set_bc(b, self.bcs, self.vector, -1.0)
 
     def jacobian(self, xin, A):
         if self.fast:
