@@ -17,15 +17,10 @@ MatSetValues, which sends them at assembly.
 `FastJacobian.usable(J)` says whether a form qualifies (cell and exterior-facet integrals,
 no dof transformations, 32-bit PETSc indices); otherwise the caller keeps DOLFINx's assembly.
 """
-import hashlib
-import importlib.util
-import os
-import sys
-
 import numpy as np
 from petsc4py import PETSc
 
-from . import compat, petsc_raw
+from . import cbuild, petsc_raw
 
 C_SOURCE = r"""
 #include <stdint.h>
@@ -161,37 +156,6 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets, uintptr_
 void rodfem_set(double* a, int n, const int64_t* positions, double value);
 """
 
-_module = None
-
-
-def _compiled():
-    """The C module, compiled once into the JIT cache (under rodfem's cache lock, rank 0 first)."""
-    global _module
-    if _module is not None:
-        return _module
-    import cffi
-    tag = hashlib.sha1((C_SOURCE + C_DECL + sys.version).encode()).hexdigest()[:16]
-    name = f"rodfem_fastasm_{tag}"
-    cache = compat.jit_cache_dir()
-    os.makedirs(cache, exist_ok=True)
-    found = [f for f in os.listdir(cache) if f.startswith(name) and f.endswith(".so")]
-    if not found:
-        ffi = cffi.FFI()
-        ffi.cdef(C_DECL)
-        ffi.set_source(name, C_SOURCE, extra_compile_args=["-O2", "-g0"])
-        build = os.path.join(cache, f"{name}.build.{os.getpid()}")
-        os.makedirs(build, exist_ok=True)
-        so = ffi.compile(tmpdir=build)
-        target = os.path.join(cache, os.path.basename(so))
-        os.replace(so, target)   # atomic: another process sees the whole file or none
-        found = [os.path.basename(target)]
-    spec = importlib.util.spec_from_file_location(name, os.path.join(cache, found[0]))
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    _module = mod
-    return mod
-
-
 class _Block:
     """A sequential AIJ block: its structure (copied once) and its values (open/close)."""
 
@@ -221,15 +185,9 @@ class FastJacobian:
     def __init__(self, J, bcs):
         from dolfinx.fem import IntegralType
         from dolfinx.fem import petsc as fpetsc
-        from .jitcache import locked
         self.J, self.bcs = J, list(bcs)
         V = J.function_spaces[0]
-        comm = V.mesh.comm
-        with locked(comm):   # rank 0 compiles (once per cache), the others load what it compiled
-            if comm.rank == 0:
-                _compiled()
-            comm.barrier()
-        self.mod = _compiled()
+        self.mod = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, V.mesh.comm)
         self.V = V
         mesh = V.mesh
         dofmap_list = V.dofmap.list() if callable(V.dofmap.list) else V.dofmap.list

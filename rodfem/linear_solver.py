@@ -20,23 +20,26 @@ the solution of A x = b is
     x_Ir = y_r - Z_r x_G,   Z_r = A_IrIr^{-1} A_IrG   (computed once per Jacobian)
 
 This is Gaussian elimination in another order, not an iteration: the result is that of a
-direct solve, to round-off (no Krylov tolerance to choose); an application costs one local
-triangular solve and one allreduce of |G| numbers; a new Jacobian costs the local LU, one
-solve per interface dof next to the rank (Z_r) and one allreduce of |G|^2 numbers.
+direct solve, to round-off (no Krylov tolerance to choose).
 
-No copy of the local matrix is made: the rank factors its diagonal block D (owned rows and
-columns) with its interface rows replaced by identity rows, M = [[A_II, A_IG], [0, I]]
-(rows zeroed in place and restored after the factorization).  M's pivots are those of A_II,
-M [y; 0] = [b_I; 0] gives y = A_II^{-1} b_I and M z = e_g gives z = [-Z e_g; e_g].
+Each rank computes its term of S straight out of its LU (rodfem/partial_lu.py: the rank's
+rows with the interface ordered last, Gaussian elimination stopped before it, the corner
+left over is -A_GI A_II^{-1} A_IG).  A new Jacobian then costs one local factorization and
+an allreduce of |G|^2 numbers; an application one forward and one backward sweep and an
+allreduce of |G| numbers.  On one rank G is empty and this is a plain sparse LU (fill-reducing
+order, no pivoting), which factors the 3D rod 1.8x faster and solves it 3x faster than PETSc's
+own LU (its factor kept split, L in row order and U in reverse row order, for the sweeps).
 
-The local LU is PETSc's own (ordering `-rodfem_schur_ordering`, default rcm); a zero pivot
-(a saddle point: multipliers) switches it, for the rest of the run, to PETSc's LU in AMD order
-(as in serial: rodfem/newton.py's LU_CHAIN), and a zero pivot there to sequential MUMPS,
-which pivots (not SuperLU as in serial: MUMPS solves the interface columns of Z together,
-3x faster than one by one, which outweighs its slower factorization: on the 3D rod, 30
-interface columns cost more than the factorization; and SuperLU's 32-bit memory index runs
-out near 10^6 dofs).  A local block that MUMPS cannot factor either (singular) makes the PC
-fall back to MUMPS on the whole matrix for the rest of the run.
+The local order is RCM (the interface side last); a zero pivot (a saddle point: multipliers)
+switches it, for the rest of the run, to AMD, and a zero pivot there to sequential MUMPS, which
+pivots.  MUMPS has no such partial factorization through PETSc 3.18, so that stage solves for
+the interface columns instead: Z_r = A_IrIr^{-1} A_IrG, one MatMatSolve per Jacobian (MUMPS
+solves the columns together; on the 3D rod, 30 columns cost more than the factorization), and
+x_Ir = y_r - Z_r x_G.  For that stage the rank factors its diagonal block D (owned rows and
+columns) with its interface rows replaced by identity rows, M = [[A_II, A_IG], [0, I]] (rows
+zeroed in place and restored after the factorization): M [y; 0] = [b_I; 0] gives y = A_II^{-1}
+b_I and M z = e_g gives z = [-Z e_g; e_g].  A local block that MUMPS cannot factor either
+(singular) makes the PC fall back to MUMPS on the whole matrix for the rest of the run.
 """
 import atexit
 import gc
@@ -48,9 +51,11 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from . import petsc_raw
+from .partial_lu import PartialLU
 
-INTERIOR_SOLVERS = ("petsc", "petsc-amd", "superlu", "mumps")
-FOLLOWING = {"petsc": "petsc-amd", "petsc-amd": "mumps", "superlu": "mumps"}   # after a zero pivot
+INTERIOR_SOLVERS = ("rcm", "amd", "superlu", "mumps")   # rcm, amd: rodfem/partial_lu.py in that order
+FOLLOWING = {"rcm": "amd", "amd": "mumps", "superlu": "mumps"}   # after a zero pivot
+PARTIAL = ("rcm", "amd")
 _LIVE = weakref.WeakSet()
 
 
@@ -91,18 +96,17 @@ class InterfaceSchur:
 
     def __init__(self):
         self.pattern = None       # nonzero count the interface was computed for
-        self.solver = "petsc"     # local LU: petsc -> petsc-amd -> mumps on zero pivots
-        self.ordering = "rcm"
+        self.solver = "rcm"       # local LU: rcm -> amd (partial LU) -> mumps on zero pivots
+        self.plu = None           # the partial LU (rcm, amd)
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
         self.nG = 0
-        self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S"), 0.0)
+        self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S", "solve"), 0.0)
         _LIVE.add(self)
 
     # -- PCPYTHON interface ---------------------------------------------------------
     def setFromOptions(self, pc):
         opts = PETSc.Options(pc.getOptionsPrefix())
-        self.ordering = opts.getString("schur_ordering", self.ordering)
         solver = opts.getString("schur_local_solver", self.solver)
         if solver not in INTERIOR_SOLVERS:
             raise ValueError(f"-{pc.getOptionsPrefix()}schur_local_solver {solver}: one of {INTERIOR_SOLVERS}")
@@ -126,7 +130,21 @@ class InterfaceSchur:
         if self.fallback is not None:
             self.fallback.solve(b, x)
             return
+        t0 = time.perf_counter()
         barr = b.getArray(readonly=True)
+        if self.plu is not None:
+            zG = self.plu.forward(barr)
+            xG = np.zeros(0)
+            if self.nG:
+                g = np.zeros(self.nG)
+                g[self.G_own_pos] = barr[self.G_own]
+                xG = self._solve_interface(self.comm.allreduce(g + zG, op=MPI.SUM))
+            out = x.getArray()
+            self.plu.backward(xG, out)
+            if self.nG:
+                out[self.G_own] = xG[self.G_own_pos]
+            self.times["solve"] += time.perf_counter() - t0
+            return
         self.rhs.array[:] = barr
         self.rhs.array[self.G_own] = 0.0
         self.ksp.solve(self.rhs, self.sol)
@@ -135,12 +153,16 @@ class InterfaceSchur:
             g = np.zeros(self.nG)
             g[self.G_own_pos] = barr[self.G_own]
             g -= self.AGC @ y[self.C]
-            g = self.comm.allreduce(g, op=MPI.SUM)
-            xG = np.linalg.solve(self.S, g)
+            xG = self._solve_interface(self.comm.allreduce(g, op=MPI.SUM))
             if len(self.ZG):
                 y = y - self.Z @ xG[self.ZG]
             y[self.G_own] = xG[self.G_own_pos]
         x.getArray()[:] = y
+        self.times["solve"] += time.perf_counter() - t0
+
+    def _solve_interface(self, g):
+        from scipy.linalg import lu_solve
+        return lu_solve(self.S_lu, g)
 
     def reset(self, pc):
         self.pattern = None
@@ -154,7 +176,7 @@ class InterfaceSchur:
                     getattr(self, "B", None), getattr(self, "X", None)]:
             if obj is not None:
                 obj.destroy()
-        self.ksp = self.fallback = self.B = self.X = None
+        self.ksp = self.fallback = self.B = self.X = self.plu = None
         self.pattern = None
 
     def view(self, pc, viewer):
@@ -211,10 +233,45 @@ class InterfaceSchur:
         self.rows_Gown = G[own].astype(PETSc.IntType)
         self.cols_G = G.astype(PETSc.IntType)
         self.cols_GC = np.concatenate([G, self.C_all]).astype(PETSc.IntType)
-        self.B = self.X = None
+        self.K = self._partial_structure(n, in_G, di, dj, (oi, oj, ocols) if Ao is not None else None)
+        self.B = self.X = self.plu = None
         self.rhs = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
         self.sol = self.rhs.duplicate()
-        self._make_ksp()
+        if self.solver not in PARTIAL:
+            self._make_ksp()
+
+    def _partial_structure(self, n, in_G, di, dj, off):
+        """K = [[A_II, A_IG], [A_GI, 0]] of this rank for rodfem/partial_lu.py: its CSR (rows: the
+        interior in local order, then G), where each entry's value is found (src: the diagonal
+        block's values, then the off-diagonal block's, then the gathered A_GC rows), the interior."""
+        interior = np.flatnonzero(~in_G)
+        nI, nG = len(interior), self.nG
+        imap = np.full(n, -1, np.int64)
+        imap[interior] = np.arange(nI)
+        imap[self.G_own] = nI + self.G_own_pos       # owned interface columns -> their place in G
+        drows = np.repeat(np.arange(n), np.diff(di))
+        keep = ~in_G[drows]
+        rows, cols, src = [imap[drows[keep]]], [imap[dj[keep]]], [np.flatnonzero(keep)]
+        nD, nO = len(dj), 0
+        if off is not None:
+            oi, oj, ocols = off
+            nO = len(oj)
+            orows = np.repeat(np.arange(n), np.diff(oi))
+            keep = ~in_G[orows]
+            pos = np.minimum(np.searchsorted(self.G, ocols[keep]), max(nG - 1, 0))
+            if nG == 0 or not np.array_equal(self.G[pos], ocols[keep]):
+                raise RuntimeError("interface: an interior row couples to another rank outside G")
+            rows.append(imap[orows[keep]])
+            cols.append(nI + pos)
+            src.append(nD + np.flatnonzero(keep))
+        if nG and len(self.C):   # the interface rows' entries in this rank's interior columns (A_GC)
+            rows.append(np.repeat(nI + np.arange(nG), len(self.C)))
+            cols.append(np.tile(imap[self.C], nG))
+            src.append(nD + nO + np.arange(nG * len(self.C)))
+        rows, cols, src = (np.concatenate(a).astype(np.int64) for a in (rows, cols, src))
+        order = np.lexsort((cols, rows))
+        ki = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=nI + nG))])
+        return dict(ki=ki, kj=cols[order], nI=nI, src=src[order], nD=nD, nO=nO, interior=interior)
 
     def _make_ksp(self):
         if self.ksp is not None:
@@ -223,32 +280,69 @@ class InterfaceSchur:
         self.ksp.setType("preonly")
         pc = self.ksp.getPC()
         pc.setType("lu")
-        pc.setFactorSolverType(self.solver.split("-")[0])
-        if self.solver == "petsc":
-            pc.setFactorOrdering(self.ordering)
-        elif self.solver == "petsc-amd":
-            pc.setFactorOrdering("amd")
-        elif self.solver == "mumps":   # sequential MUMPS on this rank's block
+        pc.setFactorSolverType(self.solver)
+        if self.solver == "mumps":   # sequential MUMPS on this rank's block
             from .newton import mumps_options
             prefix = "rodfem_schur_local_"
             mumps_options(prefix)
             self.ksp.setOptionsPrefix(prefix)
             pc.setFromOptions()
 
-    # -- a new Jacobian: local LU, Z and S -----------------------------------------------
+    # -- a new Jacobian: local LU and S -------------------------------------------------
     def _factor(self, A):
-        """Factor the local block with its interface rows as identity rows; Z, S.  False: singular."""
+        """Factor the local part and form S; False: singular (for every local LU)."""
+        from scipy.linalg import lu_factor
         T, t0 = self.times, time.perf_counter()
-        if self.nG:   # the interface rows (all ranks') and the interior rows next to the interface
+        if self.nG:   # the interface rows (all ranks'): A_GG and their entries in the interiors
             block = np.zeros((self.nG, len(self.cols_GC)))
             if len(self.rows_Gown):
                 block[self.G_own_pos] = A.getValues(self.rows_Gown, self.cols_GC)
             block = self.comm.allreduce(block, op=MPI.SUM)
             self.A_GG = block[:, :self.nG]
-            self.AGC = block[:, self.nG + self.C_pos]
+            self.AGC = np.ascontiguousarray(block[:, self.nG + self.C_pos])
+        T["extract"] += time.perf_counter() - t0
+        if self.solver in PARTIAL:
+            ok = self._factor_partial(A)
+        else:
+            ok = self._factor_with_columns(A)
+        if ok and self.nG:
+            self.S_lu = lu_factor(self.S)
+        return ok
+
+    def _factor_partial(self, A):
+        """The partial LU of K (rodfem/partial_lu.py): S = A_GG + sum_r T_r.  On a zero pivot (any
+        rank) the next local LU; False when none is left."""
+        while self.solver in PARTIAL:
+            t0 = time.perf_counter()
+            if self.plu is None:
+                K = self.K
+                self.plu = PartialLU(K["ki"], K["kj"], K["nI"], self.nG, K["src"], K["nD"], K["nO"],
+                                     method=self.solver, where=K["interior"])
+            Ad, Ao, _ = petsc_raw.blocks(A)
+            values = [petsc_raw.Values(h, read=True) for h in (Ad, Ao) if h is not None]
+            addresses = [v.open() for v in values]
+            try:
+                corner = self.plu.factor(addresses[0], addresses[1] if Ao is not None else None,
+                                         self.AGC if self.nG else None)
+            finally:
+                for v in values:
+                    v.close()
+            self.times["lu"] += time.perf_counter() - t0
+            if self.comm.allreduce(corner is not None, op=MPI.LAND):
+                if self.nG:
+                    t1 = time.perf_counter()
+                    self.S = self.A_GG + self.comm.allreduce(corner.copy(), op=MPI.SUM)
+                    self.times["S"] += time.perf_counter() - t1
+                return True
+            self.solver, self.plu = FOLLOWING[self.solver], None
+        self._make_ksp()
+        return self._factor_with_columns(A)
+
+    def _factor_with_columns(self, A):
+        """Factor the local block with its interface rows as identity rows; Z, S (the MUMPS stage)."""
+        T, t1 = self.times, time.perf_counter()
+        if self.nG:
             A_RG = A.getValues(self.rows_R, self.cols_G) if len(self.rows_R) else np.zeros((0, self.nG))
-        t1 = time.perf_counter()
-        T["extract"] += t1 - t0
         D = A.getDiagonalBlock()
         saved = [D.getRow(int(i)) for i in self.G_own]
         D.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)

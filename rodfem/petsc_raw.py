@@ -2,7 +2,8 @@
 
 - the diagonal and off-diagonal blocks of an MPIAIJ matrix and its off-diagonal column map
   (MatMPIAIJGetSeqAIJ), the CSR structure of a sequential AIJ block (MatGetRowIJ) and its
-  value array (MatSeqAIJGetArray / MatSeqAIJRestoreArray: the restore marks it changed);
+  value array (MatSeqAIJGetArray / MatSeqAIJRestoreArray: the restore marks it changed; or the
+  Read variants, which do not);
 - why a PC failed (PCGetFailedReason: a zero pivot in a factorization).
 
 The library is the one petsc4py has loaded (same process, same handles).  PetscInt must be
@@ -84,18 +85,24 @@ def rowij(handle):
 
 
 class Values:
-    """The value array of a sequential AIJ matrix: open() gives its address, close() gives it back."""
+    """The value array of a sequential AIJ matrix: open() gives its address, close() gives it back.
 
-    def __init__(self, handle):
+    `read=True`: MatSeqAIJGetArrayRead / RestoreArrayRead, which leave the matrix's state alone
+    (a restored writable array counts as a change: a solver would set itself up again)."""
+
+    def __init__(self, handle, read=False):
         self.handle = ctypes.c_void_p(handle)
         self._ptr = ctypes.c_void_p()
+        self.read = read
 
     def open(self):
-        _check(lib().MatSeqAIJGetArray(self.handle, ctypes.byref(self._ptr)), "MatSeqAIJGetArray")
+        name = "MatSeqAIJGetArrayRead" if self.read else "MatSeqAIJGetArray"
+        _check(getattr(lib(), name)(self.handle, ctypes.byref(self._ptr)), name)
         return self._ptr.value or 0
 
     def close(self):
-        _check(lib().MatSeqAIJRestoreArray(self.handle, ctypes.byref(self._ptr)), "MatSeqAIJRestoreArray")
+        name = "MatSeqAIJRestoreArrayRead" if self.read else "MatSeqAIJRestoreArray"
+        _check(getattr(lib(), name)(self.handle, ctypes.byref(self._ptr)), name)
 
 
 def pc_failed(pc):

@@ -3,7 +3,10 @@
 - `mpirun -n 2` at 10^4 planar elements converges and gives the serial history (MUMPS, the
   old parallel default, stopped at step 1 with DIVERGED_LINEAR_SOLVE there);
 - the interface Schur complement (rodfem/linear_solver.py) solves as accurately as a direct
-  LU, on 1, 2 and 3 ranks, with saddle points (the 3D rod's multipliers: SuperLU inside);
+  LU, on 1, 2 and 3 ranks, with saddle points (the 3D rod's multipliers: AMD order inside);
+- the partial LU (rodfem/partial_lu.py) leaves -A_GI A_II^{-1} A_IG in its corner and solves
+  both sweeps exactly (against dense linear algebra), in RCM and AMD order;
+- the serial LU chain: RCM, and PETSc's LU in AMD order after the 3D rod's zero pivot;
 - the fast assembly (rodfem/fastassembly.py) gives DOLFINx's matrix entry for entry.
 """
 import json
@@ -69,7 +72,7 @@ def test_interface_is_a_vertex_cover_of_the_couplings():
 
 @pytest.mark.parametrize("scene, n", [("flying-spaghetti-2d", 40), ("flying-spaghetti-3d", 8)])
 def test_schur_pc_solves_like_lu_in_serial(scene, n):
-    """On one rank the PC is the local LU (rcm; SuperLU after the 3D rod's zero pivot)."""
+    """On one rank the PC is the local LU (rcm; amd after the 3D rod's zero pivot)."""
     problem = built(scene, n)
     nw = problem.newton
     A = nw.A
@@ -83,6 +86,41 @@ def test_schur_pc_solves_like_lu_in_serial(scene, n):
     ksp.getPC().setFactorSolverType("superlu")
     assert relative_residual(A, pc.apply, b) <= 1e-13
     assert relative_residual(A, ksp.solve, b) <= 1e-13
+    assert pc.getPythonContext().describe() == ("schur(rcm)" if scene.endswith("2d") else "schur(amd)")
+
+
+@pytest.mark.parametrize("method", ["rcm", "amd"])
+def test_partial_lu_leaves_the_schur_complement(method):
+    """A chain-like interior (scrambled numbering) with an interface coupled to its last dofs:
+    the corner is -A_GI A_II^{-1} A_IG, the forward sweep gives -A_GI A_II^{-1} b_I and the
+    backward sweep A_II^{-1} (b_I - A_IG x_G), each to round-off."""
+    import scipy.sparse as sp
+
+    from rodfem.partial_lu import PartialLU
+    rng = np.random.default_rng(1)
+    nI, nG = 300, 6
+    chain = sp.diags([rng.normal(size=nI - abs(k)) for k in range(-4, 5)], range(-4, 5)) + 10 * sp.eye(nI)
+    p = rng.permutation(nI)
+    K = sp.lil_matrix((nI + nG, nI + nG))
+    K[:nI, :nI] = sp.csr_matrix(chain)[p][:, p]
+    near = np.argsort(p)[nI - 5:]
+    for g in range(nG):
+        for c in near[:3 + g % 3]:
+            K[c, nI + g], K[nI + g, c] = rng.normal(size=2)
+    K = sp.csr_matrix(K)
+    K.sort_indices()
+    lu = PartialLU(K.indptr, K.indices, nI, nG, np.arange(K.nnz), K.nnz, 0, method)
+    T = lu.factor(K.data.copy(), None, None)
+    Kd = K.toarray()
+    AII, AIG, AGI = Kd[:nI, :nI], Kd[:nI, nI:], Kd[nI:, :nI]
+    want = -AGI @ np.linalg.solve(AII, AIG)
+    assert np.max(np.abs(T - want)) <= 1e-13 * np.max(np.abs(want))
+    b, xG = rng.normal(size=nI), rng.normal(size=nG)
+    assert np.max(np.abs(lu.forward(b) + AGI @ np.linalg.solve(AII, b))) <= 1e-13
+    out = np.zeros(nI)
+    lu.backward(xG, out)
+    assert np.max(np.abs(out - np.linalg.solve(AII, b - AIG @ xG))) <= 1e-13
+    assert lu.fill < 2.5   # RCM turned so that the interface side comes last: no fill outside the band
 
 
 def test_fast_assembly_is_dolfinx_assembly():
@@ -124,14 +162,16 @@ def test_linear_time_collapse_is_dolfinx_collapse():
             assert np.array_equal(got.x.array, want.x.array), f.name
 
 
-def test_serial_lu_is_rcm_and_accurate():
-    """The serial LU runs in RCM order: no zero pivot on the beam, and an accurate solve."""
-    problem = built("flying-spaghetti-2d", 200)
+@pytest.mark.parametrize("scene, n, lu", [("flying-spaghetti-2d", 200, "petsc"), ("flying-spaghetti-3d", 12, "petsc-amd")])
+def test_serial_lu_chain(scene, n, lu):
+    """The serial LU: PETSc's in RCM order for the beam; for the 3D rod, whose multipliers are zero
+    pivots in RCM order, PETSc's in AMD order (not SuperLU: 2.1x faster); accurate solves."""
+    problem = built(scene, n)
     nw = problem.newton
-    assert nw.linear_solver == "petsc" and nw.settings["pc_factor_mat_ordering_type"] == "rcm"
+    assert nw.linear_solver == lu
     b = nw.b.copy()
     nw.assembler.residual(nw.xv, b)
-    assert relative_residual(nw.A, problem.newton.snes.getKSP().solve, b) <= 1e-13
+    assert relative_residual(nw.A, problem.newton.snes.getKSP().solve, b) <= 1e-11
 
 
 def rodfem_mpi(args, np_, timeout=240):
@@ -153,7 +193,7 @@ def test_mpi_two_ranks_at_ten_thousand_elements(rodfem, tmp_path):
     p = rodfem_mpi([*args, "--out", str(par)], 2)
     assert p.returncode == 0, p.stderr[-2000:]
     summary = json.loads((par / "summary.json").read_text())
-    assert summary["mpi_ranks"] == 2 and summary["linear_solver"] == "schur(petsc)"
+    assert summary["mpi_ranks"] == 2 and summary["linear_solver"] == "schur(rcm)"
     a, b = read_history(serial), read_history(par)
     assert len(b["t"]) == 4
     for col in a.dtype.names:
