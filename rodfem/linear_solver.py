@@ -259,7 +259,7 @@ class InterfaceSchur:
             orows = np.repeat(np.arange(n), np.diff(oi))
             keep = ~in_G[orows]
             pos = np.minimum(np.searchsorted(self.G, ocols[keep]), max(nG - 1, 0))
-            if nG == 0 or not np.array_equal(self.G[pos], ocols[keep]):
+            if np.count_nonzero(keep) and (nG == 0 or not np.array_equal(self.G[pos], ocols[keep])):
                 raise RuntimeError("interface: an interior row couples to another rank outside G")
             rows.append(imap[orows[keep]])
             cols.append(nI + pos)
