@@ -18,8 +18,9 @@ This is what MUMPS does with a Schur complement (ICNTL(19)); PETSc 3.18's own LU
 option and MUMPS factors these chains 2-3x slower than PETSc's LU.  The kernels are a plain
 up-looking sparse LU (symbolic fill once per nonzero pattern, numeric per Jacobian) in C.
 
-The interior order is RCM of the interior graph, turned so that the interface side comes last
-(the fill of the G rows then stays in the band), or AMD after a zero pivot (multipliers).
+The interior order (`interior_order`) is RCM of the interior graph, turned so that the interface
+side comes last (the fill of the G rows then stays in the band); after a zero pivot (multipliers)
+nested dissection of the graph in RCM order, or AMD.
 """
 import numpy as np
 
@@ -177,7 +178,7 @@ void plu_backward(int nI, const int32_t* where, const int64_t* up, const int64_t
 
 
 def interior_order(ki, kj, nI, nG, method):
-    """A fill-reducing order of the interior (K's rows 0..nI-1) by PETSc (`method`: rcm, amd), the
+    """A fill-reducing order of the interior (K's rows 0..nI-1) by PETSc (`method`: rcm, nd, amd), the
     interior dofs that couple to the interface G next, G (rows nI..) last.  An RCM order is turned
     round first if those dofs come early in it: at its end they leave the band as it is."""
     import scipy.sparse as sp
@@ -186,12 +187,22 @@ def interior_order(ki, kj, nI, nG, method):
     K = sp.csr_matrix((np.ones(len(kj)), kj, ki), shape=(n, n))
     graph = (K + K.T).tocsr()[:nI, :nI]
     graph.sort_indices()
-    M = PETSc.Mat().createAIJ(size=(nI, nI), csr=(graph.indptr.astype(PETSc.IntType),
-                                                  graph.indices.astype(PETSc.IntType), np.ones(graph.nnz)),
-                              comm=PETSc.COMM_SELF)
-    rows, _ = M.getOrdering(method)
-    order = np.asarray(rows.getIndices(), dtype=np.int64)
-    M.destroy()
+
+    def petsc_order(g, kind):
+        M = PETSc.Mat().createAIJ(size=g.shape, csr=(g.indptr.astype(PETSc.IntType), g.indices.astype(PETSc.IntType),
+                                                     np.ones(g.nnz)), comm=PETSc.COMM_SELF)
+        rows, _ = M.getOrdering(kind)
+        order = np.asarray(rows.getIndices(), dtype=np.int64)
+        M.destroy()
+        return order
+
+    if method == "nd":   # nested dissection of the graph in RCM order (its tie-breaks follow the chain)
+        first = petsc_order(graph, "rcm")
+        g = graph[first][:, first].tocsr()
+        g.sort_indices()
+        order = first[petsc_order(g, "nd")]
+    else:
+        order = petsc_order(graph, method)
     if nG:
         near = np.zeros(nI, bool)   # interior dofs that couple to the interface
         coupled = (K[:nI, nI:] + K[nI:, :nI].T).tocoo().row
