@@ -181,41 +181,39 @@ def rodfem_mpi(args, np_, timeout=240):
     return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout + 30)
 
 
+def serial_and_parallel(rodfem, tmp_path, args, np_):
+    """Histories of the same run in serial and under mpirun -n np_ (both must succeed; they must
+    agree to 1e-8 of each column's scale), and the parallel run's summary."""
+    serial, par = tmp_path / "np1", tmp_path / f"np{np_}"
+    s = rodfem(*args, "--out", str(serial))
+    assert s.returncode == 0, s.stderr[-2000:]
+    p = rodfem_mpi([*args, "--out", str(par)], np_)
+    assert p.returncode == 0, p.stderr[-2000:]
+    a, b = read_history(serial), read_history(par)
+    for col in a.dtype.names:
+        scale = max(np.max(np.abs(a[col])), 1.0)
+        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
+    return a, b, json.loads((par / "summary.json").read_text())
+
+
 @pytest.mark.mpi
 def test_mpi_two_ranks_at_ten_thousand_elements(rodfem, tmp_path):
     """10^4 planar elements, 3 steps: mpirun -n 2 converges and equals serial to 1e-8 (it failed
     at step 1 with MUMPS); the summary names the parallel solver."""
     args = ["run", "flying-spaghetti-2d", "--set", "n_elements=10000", "--set", "t_end=0.3",
             "--set", "frames=2", "--quiet"]
-    serial, par = tmp_path / "np1", tmp_path / "np2"
-    s = rodfem(*args, "--out", str(serial))
-    assert s.returncode == 0, s.stderr[-2000:]
-    p = rodfem_mpi([*args, "--out", str(par)], 2)
-    assert p.returncode == 0, p.stderr[-2000:]
-    summary = json.loads((par / "summary.json").read_text())
+    a, b, summary = serial_and_parallel(rodfem, tmp_path, args, 2)
     assert summary["mpi_ranks"] == 2 and summary["linear_solver"] == "schur(rcm)"
-    a, b = read_history(serial), read_history(par)
     assert len(b["t"]) == 4
-    for col in a.dtype.names:
-        scale = max(np.max(np.abs(a[col])), 1.0)
-        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
     assert np.array_equal(a["newton_its"], b["newton_its"])
     assert np.max(np.abs(b["balance_error"])) <= 1e-12 * np.max(np.abs(b["H"]))
 
 
 @pytest.mark.mpi
 def test_mpi_three_ranks_3d_rod_matches_serial(rodfem, tmp_path):
-    """Three ranks (two interfaces of 30 dofs, multipliers: SuperLU inside the ranks) give the
-    serial history of the 3D rod."""
+    """Three ranks (two interfaces of 30 dofs; multipliers: nested dissection inside the ranks)
+    give the serial history of the 3D rod."""
     args = ["run", "flying-spaghetti-3d", "--set", "n_elements=12", "--set", "t_end=0.5",
             "--set", "frames=2", "--quiet"]
-    serial, par = tmp_path / "np1", tmp_path / "np3"
-    s = rodfem(*args, "--out", str(serial))
-    assert s.returncode == 0, s.stderr[-2000:]
-    p = rodfem_mpi([*args, "--out", str(par)], 3)
-    assert p.returncode == 0, p.stderr[-2000:]
-    assert json.loads((par / "summary.json").read_text())["linear_solver"].startswith("schur(")
-    a, b = read_history(serial), read_history(par)
-    for col in a.dtype.names:
-        scale = max(np.max(np.abs(a[col])), 1.0)
-        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
+    _, _, summary = serial_and_parallel(rodfem, tmp_path, args, 3)
+    assert summary["linear_solver"] == "schur(nd)"
