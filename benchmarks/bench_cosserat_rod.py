@@ -91,7 +91,9 @@ def main():
     with open(os.path.join(HERE, "bench_cosserat_rod.md"), "w") as f:
         f.write("# 3D Cosserat rod: cost per time step (serial, flying-spaghetti-3d spatial, dt = 0.1)\n\n")
         f.write("Serial, 2-core machine. Newton variants: see VARIANTS in the script (default = the scenes' chord "
-                "Newton; PETSc's LU in RCM order meets zero pivots on the multiplier rows and the engine switches to its AMD order; 3 steps at 1024 elements from a fresh start include the first factorizations: benchmarks/scaling.md has warm steps).\n"
+                "Newton; PETSc's LU in RCM order meets zero pivots on the multiplier rows and the engine switches "
+                "to its AMD order; 3 steps at 1024 elements from a fresh start include the first factorizations: "
+                "benchmarks/scaling.md has warm steps).\n"
                 "J = Jacobian assembly, F = residual assembly, rest = LU factorisation/solve + energy + observables.\n\n")
         f.write("| elements | dofs | Newton | ms/step | Newton its/step | J ms | F ms | LU + rest ms | solver |\n")
         f.write("|---|---|---|---|---|---|---|---|---|\n")
