@@ -97,8 +97,8 @@ class InterfaceSchur:
 
     def __init__(self):
         self.pattern = None       # nonzero count the interface was computed for
-        self.solver = "rcm"       # local LU: rcm -> amd (partial LU) -> mumps on zero pivots
-        self.plu = None           # the partial LU (rcm, amd)
+        self.solver = "rcm"       # local LU: rcm -> nd -> amd (partial LU) -> mumps on zero pivots
+        self.plu = None           # the partial LU (rcm, nd, amd)
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
         self.nG = 0
