@@ -183,7 +183,11 @@ MUTATIONS = [
       ["tests/test_system.py::test_driven_joint_is_an_input_port"],
       "a driven joint's work -lambda . dg_p missing from the supplied work"),
     M("joint-rows-dropped-off-rank", "rodfem/system.py",
-      [("        A.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, False)", "        pass")],
+      [('    """A[rows, cols] += values (PETSc reads the values row by row: make them C-contiguous)."""',
+        '    """A[rows, cols] += values (PETSc reads the values row by row: make them C-contiguous)."""\n'
+        '    lo, hi = A.getOwnershipRange()\n'
+        '    keep = (np.asarray(rows) >= lo) & (np.asarray(rows) < hi)\n'
+        '    rows, values = np.asarray(rows)[keep], np.asarray(values)[keep]')],
       ["tests/test_system.py::test_four_bar_two_ranks_equal_serial"],
       "the joints' rows that rank 0 adds for other ranks are dropped (np2 differs or fails)"),
     M("rigid-body-director-mass", "forms/rigid_body.py",
@@ -197,6 +201,24 @@ MUTATIONS = [
       ["tests/test_string.py::test_wave_speed",
        "tests/test_string.py::test_spatial_order_of_a_vibrating_string"],
       "inertia with the mass per stretched length rhoA/sqrt(C) where rhoA is per reference length"),
+    # -- larger meshes: the solvers ------------------------------------------------------------
+    M("partial-lu-update-sign", "rodfem/partial_lu.py",
+      [("w[uj[t]] -= l * ua[t];", "w[uj[t]] += l * ua[t];")],
+      ["tests/test_scaling.py::test_partial_lu_leaves_the_schur_complement"],
+      "the partial LU's elimination adds the update instead of subtracting it"),
+    M("schur-corner-sign", "rodfem/linear_solver.py",
+      [("self.S = self.A_GG + self.comm.allreduce(corner.copy(), op=MPI.SUM)",
+        "self.S = self.A_GG - self.comm.allreduce(corner.copy(), op=MPI.SUM)")],
+      ["tests/test_scaling.py::test_mpi_two_ranks_at_ten_thousand_elements"],
+      "the ranks' Schur terms subtracted: the interface solve is wrong under mpirun"),
+    M("schur-backward-without-interface", "rodfem/linear_solver.py",
+      [("self.plu.backward(xG, out)", "self.plu.backward(np.zeros_like(xG), out)")],
+      ["tests/test_scaling.py::test_mpi_two_ranks_at_ten_thousand_elements"],
+      "the interiors' back-substitution ignores the interface values x_G"),
+    M("lu-chain-skips-amd", "rodfem/newton.py",
+      [("following = names[names.index(failed) + 1]", "following = names[min(names.index(failed) + 2, len(names) - 1)]")],
+      ["tests/test_scaling.py::test_serial_lu_chain"],
+      "after RCM's zero pivot the serial LU skips PETSc's AMD order (SuperLU: 2x slower on the 3D rod)"),
 ]
 
 
