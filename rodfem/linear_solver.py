@@ -102,6 +102,7 @@ class InterfaceSchur:
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
         self.nG = 0
+        self.ready = False        # set up for the current operator
         self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S", "solve"), 0.0)
         _LIVE.add(self)
 
@@ -122,12 +123,18 @@ class InterfaceSchur:
                 self._split(A)
                 self.pattern = nz
             if self._factor(A):
+                self.ready = True
                 return
             self._fall_back(pc)
         self.fallback.setOperators(A)
         self.fallback.setUp()
+        self.ready = True
 
     def apply(self, pc, b, x):
+        if not self.ready:
+            # a context made afresh by the options (Newton's settings applied again after a failed
+            # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
+            self.setUp(pc)
         if self.fallback is not None:
             self.fallback.solve(b, x)
             return
@@ -167,6 +174,7 @@ class InterfaceSchur:
 
     def reset(self, pc):
         self.pattern = None
+        self.ready = False
 
     def destroy(self, pc):
         self.release()
@@ -179,6 +187,7 @@ class InterfaceSchur:
                 obj.destroy()
         self.ksp = self.fallback = self.B = self.X = self.plu = None
         self.pattern = None
+        self.ready = False
 
     def view(self, pc, viewer):
         viewer.printfASCII(f"  interface Schur complement: {self.nG} interface dofs, local LU {self.describe()}\n")
