@@ -269,6 +269,11 @@ class PartialLU:
         self.x = np.zeros(n)
         self.T = np.zeros((self.nG, self.nG))
         self.nnz = int(nnz)
+        # cffi views of the arrays the kernels take, made once (the arrays are not reallocated)
+        self.c = {name: self._p(getattr(self, name), kind) for name, kind in (
+            ("perm", "int32_t"), ("bidx", "int32_t"), ("ki", "int32_t"), ("kcol", "int32_t"), ("src", "int64_t"),
+            ("lp", "int64_t"), ("lj", "int32_t"), ("la", "double"), ("up", "int64_t"), ("uend", "int64_t"),
+            ("uj", "int32_t"), ("ua", "double"), ("T", "double"), ("w", "double"), ("x", "double"))}
 
     def _p(self, a, kind):
         return self.mod.ffi.from_buffer(f"{kind}[]", a)
@@ -290,25 +295,22 @@ class PartialLU:
         dp, op = pointer(D), pointer(O)
         gp = self._p(np.ascontiguousarray(G, dtype=np.float64).reshape(-1), "double") if G is not None and np.size(G) \
             else ffi.NULL
-        P = self._p
-        status = lib.plu_numeric(self.n, self.nI, P(self.perm, "int32_t"), P(self.ki, "int32_t"),
-                                 P(self.kcol, "int32_t"), P(self.src, "int64_t"), self.nD, self.nO, dp, op, gp,
-                                 P(self.lp, "int64_t"), P(self.lj, "int32_t"), P(self.la, "double"),
-                                 P(self.up, "int64_t"), P(self.uend, "int64_t"), P(self.uj, "int32_t"),
-                                 P(self.ua, "double"), P(self.T, "double"), P(self.w, "double"))
+        c = self.c
+        status = lib.plu_numeric(self.n, self.nI, c["perm"], c["ki"], c["kcol"], c["src"], self.nD, self.nO,
+                                 dp, op, gp, c["lp"], c["lj"], c["la"], c["up"], c["uend"], c["uj"], c["ua"],
+                                 c["T"], c["w"])
         return None if status else self.T
 
     def forward(self, b):
         """z_G = -A_GI A_II^{-1} b_I (b_I read from b at `where`); keeps z_I."""
-        P = self._p
+        c = self.c
         b = np.ascontiguousarray(b, dtype=np.float64)
-        self.mod.lib.plu_forward(self.n, self.nI, P(self.bidx, "int32_t"), P(self.lp, "int64_t"),
-                                 P(self.lj, "int32_t"), P(self.la, "double"), P(b, "double"), P(self.x, "double"))
+        self.mod.lib.plu_forward(self.n, self.nI, c["bidx"], c["lp"], c["lj"], c["la"], self._p(b, "double"), c["x"])
         return self.x[self.nI:].copy()
 
     def backward(self, xG, out):
         """out[where] <- A_II^{-1} (b_I - A_IG x_G), after forward(b)."""
-        P = self._p
+        c = self.c
         self.x[self.nI:] = xG
-        self.mod.lib.plu_backward(self.nI, P(self.bidx, "int32_t"), P(self.up, "int64_t"), P(self.uend, "int64_t"),
-                                  P(self.uj, "int32_t"), P(self.ua, "double"), P(self.x, "double"), P(out, "double"))
+        self.mod.lib.plu_backward(self.nI, c["bidx"], c["up"], c["uend"], c["uj"], c["ua"], c["x"],
+                                  self._p(out, "double"))
