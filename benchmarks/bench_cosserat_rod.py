@@ -25,14 +25,14 @@ from demos import flying_spaghetti_3d
 HERE = os.path.dirname(os.path.abspath(__file__))
 # Newton variants.  "default" is what the 3D scenes use (demos/_rod3d.py NEWTON:
 # chord Newton reusing the Jacobian and its LU over 8 iterations, across steps,
-# full-Newton retry on failure; SuperLU after PETSc's LU meets the zero pivots of
-# the multiplier rows).  "full": a fresh Jacobian every iteration.  "chord +
-# reordered LU": the default plus PETSc's own LU reordered for a nonzero diagonal
-# (faster, but it crashed PETSc 3.18 in MatLUFactorNumeric on the inextensible
-# rod, C_N1 = 0, so it is not the default).
+# full-Newton retry on failure; the partial LU of rodfem/partial_lu.py, which orders
+# the multipliers after the dofs they constrain, after PETSc's LU meets their zero
+# pivots).  "full": a fresh Jacobian every iteration.  (PETSc's own LU reordered for
+# a nonzero diagonal, -pc_factor_nonzeros_along_diagonal, is not a variant: it crashed
+# PETSc 3.18 on the inextensible rod and on the tendon arm, and gave the tendon arm a
+# factor too inaccurate for Newton.)
 VARIANTS = {"default (chord lag 8)": {},
-            "full Newton": {"snes_lag_jacobian": 1},
-            "chord + reordered LU": {"pc_factor_nonzeros_along_diagonal": 1e-12, "pc_factor_mat_solver_type": "petsc"}}
+            "full Newton": {"snes_lag_jacobian": 1}}
 
 
 def set_options(opts):
@@ -92,7 +92,7 @@ def main():
         f.write("# 3D Cosserat rod: cost per time step (serial, flying-spaghetti-3d spatial, dt = 0.1)\n\n")
         f.write("Serial, 2-core machine. Newton variants: see VARIANTS in the script (default = the scenes' chord "
                 "Newton; PETSc's LU in RCM order meets zero pivots on the multiplier rows and the engine switches "
-                "to its AMD order; 3 steps at 1024 elements from a fresh start include the first factorizations: "
+                "to the partial LU, which orders them last; the Jacobian holds only its possible nonzeros; 3 steps at 1024 elements from a fresh start include the first factorizations: "
                 "benchmarks/scaling.md has warm steps).\n"
                 "J = Jacobian assembly, F = residual assembly, rest = LU factorisation/solve + energy + observables.\n\n")
         f.write("| elements | dofs | Newton | ms/step | Newton its/step | J ms | F ms | LU + rest ms | solver |\n")

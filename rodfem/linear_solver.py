@@ -214,6 +214,8 @@ class InterfaceSchur:
             ocols = orows = np.zeros(0, np.int64)
         owner = np.searchsorted(ranges, ocols, side="right") - 1
         G = interface(comm.allgather(np.stack([orows + lo, ocols, owner], axis=1)))
+        di, dj = petsc_raw.rowij(Ad)
+        G = self._with_multipliers(A, G, lo, di, dj, orows, ocols)
         self.G, self.nG = G, len(G)
         own = (G >= lo) & (G < hi)
         self.G_own = (G[own] - lo).astype(PETSc.IntType)   # local indices of the owned interface dofs
@@ -221,7 +223,6 @@ class InterfaceSchur:
         in_G = np.zeros(n, bool)
         in_G[self.G_own] = True
         # interior rows with an entry in an interface column (A_IG), and those columns
-        di, dj = petsc_raw.rowij(Ad)
         hit = np.flatnonzero(in_G[dj])
         hit_rows = np.searchsorted(di, hit, side="right") - 1
         hit_cols = dj[hit] + lo
@@ -249,6 +250,23 @@ class InterfaceSchur:
         self.sol = self.rhs.duplicate()
         if self.solver not in PARTIAL:
             self._make_ksp()
+
+    def _with_multipliers(self, A, G, lo, di, dj, orows, ocols):
+        """G and the dofs with a zero diagonal (multipliers) coupled to it: a multiplier whose
+        constrained dofs are all on the interface would have an empty row in A_II (singular)."""
+        n = len(di) - 1
+        diagonal = A.getDiagonal()
+        zero = diagonal.array == 0
+        diagonal.destroy()
+        in_G = np.zeros(n, bool)
+        own = (G >= lo) & (G < lo + n)
+        in_G[G[own] - lo] = True
+        rows = np.repeat(np.arange(n), np.diff(di))
+        touches = np.zeros(n, bool)
+        touches[rows[in_G[dj]]] = True
+        touches[orows[np.isin(ocols, G)]] = True
+        extra = np.flatnonzero(zero & touches & ~in_G) + lo
+        return np.union1d(G, np.concatenate(self.comm.allgather(extra))).astype(np.int64)
 
     def _partial_structure(self, n, in_G, di, dj, off):
         """K = [[A_II, A_IG], [A_GI, 0]] of this rank for rodfem/partial_lu.py: its CSR (rows: the
@@ -326,8 +344,11 @@ class InterfaceSchur:
             t0 = time.perf_counter()
             if self.plu is None:
                 K = self.K
+                diagonal = A.getDiagonal()   # zero on the multipliers' rows: they are eliminated late
                 self.plu = PartialLU(K["ki"], K["kj"], K["nI"], self.nG, K["src"], K["nD"], K["nO"],
-                                     method=self.solver, where=K["interior"])
+                                     method=self.solver, where=K["interior"],
+                                     postpone=diagonal.array[K["interior"]] == 0)
+                diagonal.destroy()
             Ad, Ao, _ = petsc_raw.blocks(A)
             values = [petsc_raw.Values(h, read=True) for h in (Ad, Ao) if h is not None]
             addresses = [v.open() for v in values]

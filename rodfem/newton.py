@@ -9,10 +9,10 @@ the exact Schur complement over the rank interfaces of rodfem/linear_solver.py
 workspace at 10^4 elements).  PETSc's LU does not pivot, so a zero pivot (saddle
 points: multipliers, zero densities in statics) makes it fail; the serial solver
 then switches once, for the rest of the run, to the next LU of `LU_CHAIN` and
-repeats the step: PETSc's LU in AMD order (it eliminates the dofs a multiplier
-couples before the multiplier, and factors the 3D rod 2.1x faster than SuperLU),
-then the pivoting LUs SuperLU and MUMPS; the parallel one does the same inside the
-ranks (`Newton.linear_solver` tells which one ran).  (Not
+repeats the step: the partial LU of rodfem/partial_lu.py (it orders each multiplier
+after the dofs it constrains; on the 3D rod 4x faster to factor than SuperLU), PETSc's
+LU in AMD order, then the pivoting LUs SuperLU and MUMPS; the parallel solver does
+the same inside the ranks (`Newton.linear_solver` tells which one ran).  (Not
 superlu_dist: it crashes at exit on this stack.)  Every setting can be overridden
 from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``; MUMPS in parallel:
@@ -53,23 +53,30 @@ LARGE = 10_000
 LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
 # The LUs to try, in order, each after the previous one met a zero pivot (name: PETSc options).
 # PETSc's own LU does not pivot: in RCM order a multiplier (the 3D rod's collocated constraints,
-# joints) is a zero pivot; in AMD order the dofs it couples come first and give it a pivot.
-# Measured on flying-spaghetti-3d's Jacobian (1024 elements, 73,758 unknowns): factorization
-# 145 ms (AMD) / 311 ms (SuperLU) / 363 ms (MUMPS), solve 15 / 21 / 19 ms; 100 elements: 14 / 51 /
-# 50 ms and 0.6 / 1.5 / 1.4 ms.  An unpivoted LU reached that way that then fails Newton (a small
-# pivot, not a zero one) hands over to the next LU too.  SuperLU's 32-bit memory index runs out on
-# large matrices (the 3D rod at 10^4 elements, 1e8 nonzeros: "Not enough memory", and destroying
-# that failed factor crashes): above SUPERLU_NONZEROS MUMPS comes straight after.
-LU_CHAIN = {"petsc": {"pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
-            "petsc-amd": {"pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
-            "superlu": {"pc_factor_mat_solver_type": "superlu"},
-            "mumps": {"pc_factor_mat_solver_type": "mumps"}}
+# joints) is a zero pivot.  Next comes the partial LU of rodfem/partial_lu.py (the parallel
+# solver's, here with no interface), which orders the multipliers after the dofs they constrain:
+# on the 3D rod's Jacobian (1024 elements, 73,758 unknowns, only its possible nonzeros:
+# rodfem/fastassembly.py) it factors in 40 ms and solves in 2.6 ms; PETSc's LU in AMD order meets
+# a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
+# -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
+# Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
+# LU reached that way that then fails Newton (a small pivot, not a zero one) hands over to the
+# next LU too.  SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4
+# elements, 1e8 nonzeros: "Not enough memory", and destroying that failed factor crashes): above
+# SUPERLU_NONZEROS MUMPS comes straight after.
+LU_CHAIN = {"petsc": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
+            "schur": {"pc_type": "python", "pc_python_type": "rodfem.linear_solver.InterfaceSchur"},
+            "petsc-amd": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
+            "superlu": {"pc_type": "lu", "pc_factor_mat_solver_type": "superlu"},
+            "mumps": {"pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}}
 PIVOTING = ("superlu", "mumps")
 SUPERLU_NONZEROS = 4e7
 
 
 def lu_name(settings):
     """The LU_CHAIN name of the LU that `settings` select."""
+    if settings.get("pc_type") == "python":
+        return "schur"
     solver = settings.get("pc_factor_mat_solver_type", "petsc")
     if solver == "petsc" and settings.get("pc_factor_mat_ordering_type", "rcm") == "amd":
         return "petsc-amd"
@@ -238,13 +245,19 @@ class Newton:
 
     def use_lu(self, name):
         """Factor with LU_CHAIN[name] from now on (the PC set up again at the next solve)."""
-        for key in ("pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
+        for key in ("pc_type", "pc_python_type", "pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
             self.settings.pop(key, None)
         self.settings.update(LU_CHAIN[name])
         if name == "mumps":
             mumps_options(self.prefix)
         pc = self.snes.getKSP().getPC()   # (the rest of the SNES keeps its configuration)
         pc.reset()
+        pc.setType(LU_CHAIN[name]["pc_type"])
+        if name == "schur":
+            from . import petsc_raw
+            pc.setPythonType(LU_CHAIN[name]["pc_python_type"])
+            petsc_raw.pc_clear_failure(pc)
+            return
         pc.setFactorSolverType(LU_CHAIN[name]["pc_factor_mat_solver_type"])
         if "pc_factor_mat_ordering_type" in LU_CHAIN[name]:
             pc.setFactorOrdering(LU_CHAIN[name]["pc_factor_mat_ordering_type"])
@@ -268,7 +281,7 @@ class Newton:
         lu = lu_name(self.settings)
         switched = lu != "petsc" and lu not in PIVOTING   # an unpivoted LU reached after a zero pivot
         if (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE or (reason <= 0 and switched)) \
-                and self.settings.get("pc_type") == "lu" and lu in LU_CHAIN:
+                and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
             following = next_lu(self.A, lu)
             if following is not None:
                 self.use_lu(following)
@@ -291,7 +304,7 @@ class Newton:
         try:
             return self._solve(step, t)
         finally:
-            for key in ("pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
+            for key in ("pc_type", "pc_python_type", "pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
                 chord.pop(key, None)
                 if key in self.settings:
                     chord[key] = self.settings[key]

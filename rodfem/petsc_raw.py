@@ -4,7 +4,7 @@
   (MatMPIAIJGetSeqAIJ), the CSR structure of a sequential AIJ block (MatGetRowIJ) and its
   value array (MatSeqAIJGetArray / MatSeqAIJRestoreArray: the restore marks it changed; or the
   Read variants, which do not);
-- why a PC failed (PCGetFailedReason: a zero pivot in a factorization).
+- why a PC failed (PCGetFailedReason: a zero pivot in a factorization), and forgetting it.
 
 The library is the one petsc4py has loaded (same process, same handles).  PetscInt must be
 32-bit (Debian's PETSc); callers check `usable()`.
@@ -110,3 +110,16 @@ def pc_failed(pc):
     reason = ctypes.c_int()
     _check(lib().PCGetFailedReason(ctypes.c_void_p(pc.handle), ctypes.byref(reason)), "PCGetFailedReason")
     return reason.value != 0
+
+
+def pc_clear_failure(pc):
+    """PCSetFailedReason(pc, PC_NOERROR): a python PC put in place of a failed LU does not
+    set it itself, and KSP would report the LU's failure (DIVERGED_PC_FAILED) for it."""
+    _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(0)), "PCSetFailedReason")
+
+
+def nonzero_state(A):
+    """MatGetNonzeroState: changes whenever A's nonzero pattern changes (the same on every rank)."""
+    state = ctypes.c_int64()
+    _check(lib().MatGetNonzeroState(ctypes.c_void_p(A.handle), ctypes.byref(state)), "MatGetNonzeroState")
+    return state.value

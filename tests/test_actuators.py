@@ -225,9 +225,11 @@ def test_planar_beam_ports_balance():
     assert np.ptp(res2.column("tip_y")) > 0.05
 
 
-def test_zero_inputs_change_nothing_bit_for_bit():
+def test_zero_inputs_change_nothing():
     """tau = 0 and p = 0 (as numbers and as functions of t): the history and the state equal the
-    unactuated rod's bit for bit (gravity on, 50 steps)."""
+    unactuated rod's to round-off (gravity on, 50 steps).  (Not bit for bit: the actuators' terms
+    are possible nonzeros of the Jacobian, rodfem/fastassembly.py, so its pattern and the LU's
+    elimination order differ.)"""
     rod = CosseratRod(1.0, [0.02, 0.01, 0.01], [1e-3, 1e-3, 1e-3], [1e-1, 1e-1, 1e-1])
     gravity = Load("v", [0.0, 0.0, -9.81], "domain", "gravity")
 
@@ -241,9 +243,12 @@ def test_zero_inputs_change_nothing_bit_for_bit():
         return P, run(P, 0.01, 0.5)
     P0, r0 = make(False)
     P1, r1 = make(True)
-    assert np.array_equal(P0.x0.x.array, P1.x0.x.array)
-    for k in ("H", "supplied", "balance_error", "newton_its", "tip_x", "tip_y", "tip_z"):
-        assert np.array_equal(r0.column(k), r1.column(k)), k
+    x0, x1 = P0.x0.x.array, P1.x0.x.array
+    assert np.max(np.abs(x0 - x1)) <= 1e-13 * np.max(np.abs(x0))
+    assert np.array_equal(r0.column("newton_its"), r1.column("newton_its"))
+    for k in ("H", "supplied", "tip_x", "tip_y", "tip_z"):
+        assert np.max(np.abs(r0.column(k) - r1.column(k))) <= 1e-13 * np.max(np.abs(r0.column(k))), k
+    assert max(np.max(np.abs(r.column("balance_error"))) for r in (r0, r1)) <= 1e-13 * np.max(np.abs(r0.column("H")))
     assert np.ptp(r1.column("tip_z")) > 0.1
 
 
