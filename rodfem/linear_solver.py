@@ -27,13 +27,16 @@ rows with the interface ordered last, Gaussian elimination stopped before it, th
 left over is -A_GI A_II^{-1} A_IG).  A new Jacobian then costs one local factorization and
 an allreduce of |G|^2 numbers; an application one forward and one backward sweep and an
 allreduce of |G| numbers.  On one rank G is empty and this is a plain sparse LU (fill-reducing
-order, no pivoting), which factors the 3D rod 1.8x faster and solves it 3x faster than PETSc's
-own LU (its factor kept split, L in row order and U in reverse row order, for the sweeps).
+order, no pivoting; its factor kept split, L in row order and U in reverse row order, for the
+sweeps): the serial LU chain's stage after PETSc's LU meets a zero pivot (rodfem/newton.py).
 
-The local order is RCM (the interface side last); a zero pivot (a saddle point: multipliers)
-switches it, for the rest of the run, to nested dissection of the graph in RCM order (on the 3D
-rod's half at 1024 elements: fill 1.19 against AMD's 1.43, 140 against 196 ms per step), then to
-AMD, and a zero pivot there to sequential MUMPS, which pivots.  MUMPS has no such partial factorization through PETSc 3.18, so that stage solves for
+Dofs with a zero diagonal (multipliers) are ordered after the dofs they couple to, so that their
+pivot is not zero; an interface node's multipliers whose constrained dofs are all on the
+interface join the interface (in the interior their rows would be empty).  The local order is
+the one with the least fill of RCM (either way round: the fill depends on the direction) and
+AMD, the interface side last; a zero pivot switches it, for the rest of the run, to nested
+dissection of the graph in RCM order, then to AMD, and a zero pivot there to sequential MUMPS,
+which pivots.  MUMPS has no such partial factorization through PETSc 3.18, so that stage solves for
 the interface columns instead: Z_r = A_IrIr^{-1} A_IrG, one MatMatSolve per Jacobian (MUMPS
 solves the columns together; on the 3D rod, 30 columns cost more than the factorization), and
 x_Ir = y_r - Z_r x_G.  For that stage the rank factors its diagonal block D (owned rows and
@@ -97,7 +100,7 @@ class InterfaceSchur:
 
     def __init__(self):
         self.pattern = None       # nonzero count the interface was computed for
-        self.solver = "rcm"       # local LU: rcm -> nd -> amd (partial LU) -> mumps on zero pivots
+        self.solver = "rcm"       # local LU: rcm (least fill of RCM, AMD) -> nd -> amd (partial LU) -> mumps
         self.plu = None           # the partial LU (rcm, nd, amd)
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
