@@ -134,7 +134,10 @@ BEFORE = ["Before (issue 11, same machine): planar serial 10–28 / 258 / 2734 m
           "Intermediate (the interface Schur complement with one local solve per interface column, full Newton "
           "below 10^5 unknowns, SuperLU after the 3D rod's zero pivot; measured at load ~1): planar serial / np2 "
           "89 / 74 ms at 10^4 and 629 / 486 ms at 10^5 elements; 3D rod 45 / 44 ms at 100 and 546 / 435 ms at "
-          "1024 elements.", ""]
+          "1024 elements.", "",
+          "With DOLFINx's full element pattern (every dof of a cell coupled to every other) and PETSc's LU in "
+          "AMD order after the 3D rod's zero pivot (the previous version, best of 3): 3D rod serial 26.3 / 257 / "
+          "763 / 2622 ms and np2 15.4 / 132 / 398 / 1360 ms at 100 / 1024 / 3000 / 10^4 elements.", ""]
 
 def fit_exponent(ns, ts):
     import numpy as np
