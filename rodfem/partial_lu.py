@@ -252,13 +252,13 @@ class PartialLU:
         # entries of the factor per entry of K on each of two ranks, AMD 4.1; on one rank RCM
         # 6.8 either way, AMD 2.8.  So "rcm" tries these three orders and keeps the least fill.
         best = None
-        tries = (("rcm", False), ("rcm", True), ("amd", False)) if method == "rcm" else ((method, False),)
+        tries = (("amd", False), ("rcm", False), ("rcm", True)) if method == "rcm" else ((method, False),)
         for kind, reverse in tries:
             self.perm = interior_order(self.ki, self.kj, nI, nG, kind, postpone, reverse)
             self.iperm = np.empty_like(self.perm)
             self.iperm[self.perm] = np.arange(self.n, dtype=np.int32)
-            nnz = self._symbolic_count()
-            if best is None or nnz < best[0]:
+            nnz = self._symbolic_count(limit=best[0] if best else None)   # (given up above the best)
+            if nnz is not None and (best is None or nnz < best[0]):
                 best = (nnz, self.perm, self.iperm, self._pattern)
         _, self.perm, self.iperm, self._pattern = best
         # where = positions of K's interior rows in the caller's vectors (default: 0..nI-1)
@@ -266,13 +266,14 @@ class PartialLU:
         self.bidx = np.ascontiguousarray(where[self.perm[:nI]], dtype=np.int32)
         self._symbolic()
 
-    def _symbolic_count(self):
-        """The factor's pattern in the order perm (C): its number of entries (kept in self._pattern)."""
+    def _symbolic_count(self, limit=None):
+        """The factor's pattern in the order perm (C): its number of entries (kept in self._pattern),
+        or None if it has more than `limit`."""
         lib = self.mod.lib
         n, nI = self.n, self.nI
         fi = np.zeros(n + 1, np.int64)
         fdiag = np.zeros(n, np.int64)
-        cap = 4 * len(self.kj) + n
+        cap = 4 * len(self.kj) + n if limit is None else limit
         while True:
             fj = np.zeros(cap, np.int32)
             nnz = lib.plu_symbolic(n, nI, self._p(self.perm, "int32_t"), self._p(self.iperm, "int32_t"),
@@ -280,6 +281,8 @@ class PartialLU:
                                    self._p(fi, "int64_t"), self._p(fj, "int32_t"), self._p(fdiag, "int64_t"), cap)
             if nnz >= 0:
                 break
+            if limit is not None:
+                return None
             cap *= 2
         self._pattern = (self.perm, fi, fj[:nnz])
         return int(nnz)
