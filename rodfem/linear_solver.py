@@ -106,6 +106,7 @@ class InterfaceSchur:
         self.ksp = None
         self.nG = 0
         self.ready = False        # set up for the current operator
+        self.failed = False       # serial: no order without a zero pivot (Newton takes the next LU)
         self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S", "solve"), 0.0)
         _LIVE.add(self)
 
@@ -128,12 +129,19 @@ class InterfaceSchur:
             if self._factor(A):
                 self.ready = True
                 return
+            if self.comm.size == 1:   # a zero pivot in every order: Newton goes on to the next LU
+                petsc_raw.pc_set_failed(pc)
+                self.failed = self.ready = True
+                return
             self._fall_back(pc)
         self.fallback.setOperators(A)
         self.fallback.setUp()
         self.ready = True
 
     def apply(self, pc, b, x):
+        if self.failed:
+            x.set(np.nan)
+            return
         if not self.ready:
             # a context made afresh by the options (Newton's settings applied again after a failed
             # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
@@ -369,6 +377,8 @@ class InterfaceSchur:
                     self.times["S"] += time.perf_counter() - t1
                 return True
             self.solver, self.plu = FOLLOWING[self.solver], None
+        if self.comm.size == 1:   # a stage of Newton's serial LU chain: the pivoting LUs come next there
+            return False
         self._make_ksp()
         return self._factor_with_columns(A)
 

@@ -225,14 +225,24 @@ def interior_order(ki, kj, nI, nG, method, postpone=None, reverse=False):
         order = order[::-1]
     order = np.concatenate([np.flatnonzero(held & ~near), order, np.flatnonzero(near)])
     if postpone is not None and np.any(postpone):
+        # in rounds: a postponed dof goes right after the last of its partners placed so far, the
+        # dofs k with K_zk and K_kz both nonzero (only those give its pivot a term -K_zk K_kz / u_kk)
+        # (round k adds 2^-k: a massless director rate after the stresses it couples to, then a
+        # multiplier that constrains only that rate after it)
+        pairs = K[:nI, :nI].multiply(K[:nI, :nI].T).tocsr()
         position = np.empty(nI, np.float64)
         position[order] = np.arange(nI)
-        others = np.where(postpone[graph.indices], -1.0, position[graph.indices])
-        nonempty = np.diff(graph.indptr) > 0
-        last = np.full(nI, -1.0)
-        last[nonempty] = np.maximum.reduceat(others, graph.indptr[:-1][nonempty])
-        z = np.flatnonzero(postpone)
-        position[z] = np.maximum(position[z], last[z] + 0.5)
+        placed = ~np.asarray(postpone, bool)
+        rows = np.repeat(np.arange(nI), np.diff(pairs.indptr))
+        for k in range(1, 30):
+            waiting = ~placed[rows] & placed[pairs.indices]
+            if not waiting.any():
+                break
+            last = np.full(nI, -np.inf)
+            np.maximum.at(last, rows[waiting], position[pairs.indices[waiting]])
+            now = np.isfinite(last) & ~placed
+            position[now] = last[now] + 0.5 ** k
+            placed |= now
         order = np.argsort(position, kind="stable")
     return np.concatenate([order, np.arange(nI, n)]).astype(np.int32)
 

@@ -118,6 +118,11 @@ def pc_clear_failure(pc):
     _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(0)), "PCSetFailedReason")
 
 
+def pc_set_failed(pc):
+    """PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT): a python PC's factorization met a zero pivot."""
+    _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(2)), "PCSetFailedReason")
+
+
 def nonzero_state(A):
     """MatGetNonzeroState: changes whenever A's nonzero pattern changes (the same on every rank)."""
     state = ctypes.c_int64()

@@ -6,7 +6,8 @@
   LU, on 1, 2 and 3 ranks, with saddle points (the 3D rod's multipliers: AMD order inside);
 - the partial LU (rodfem/partial_lu.py) leaves -A_GI A_II^{-1} A_IG in its corner and solves
   both sweeps exactly (against dense linear algebra), in RCM and AMD order;
-- the serial LU chain: RCM, and the partial LU (multipliers last) after the 3D rod's zero pivot;
+- the serial LU chain: RCM, and the partial LU (multipliers last) after the 3D rod's zero pivot,
+  SuperLU when every order of the partial LU meets one;
 - the fast assembly (rodfem/fastassembly.py) gives DOLFINx's matrix entry for entry, keeps only
   the possible nonzeros where they are few (the 3D rod), and inserts an entry its pattern missed.
 """
@@ -210,6 +211,25 @@ def test_serial_lu_chain(scene, n, lu):
     b = nw.b.copy()
     nw.assembler.residual(nw.xv, b)
     assert relative_residual(nw.A, problem.newton.snes.getKSP().solve, b) <= 1e-11
+
+
+@pytest.mark.parametrize("scene, values, lu", [
+    ("whirling-rod-3d", {"n_elements": 8}, "schur(rcm)"),
+    ("helix-3d", {"n_elements": 8, "constraint": "kirchhoff"}, "superlu")])
+def test_serial_lu_chain_on_harder_saddle_points(scene, values, lu):
+    """A thin section (massless axis director: w1 has a zero diagonal too, and lambda_11 couples
+    only to it) is ordered by the partial LU in rounds (w1 after the stresses, lambda_11 after w1);
+    a massless Kirchhoff rod (statics: every velocity a multiplier) has a zero pivot in every
+    order, and the partial LU hands over to SuperLU, which pivots.  Accurate solves."""
+    s = load(scene)
+    p = s.values(values)
+    problem = s.build(p, MPI.COMM_WORLD)
+    run(problem, p["dt"], 2 * p["dt"])
+    nw = problem.newton
+    assert nw.linear_solver == lu
+    b = nw.b.copy()
+    nw.assembler.residual(nw.xv, b)
+    assert relative_residual(nw.A, nw.snes.getKSP().solve, b) <= 1e-11
 
 
 def rodfem_mpi(args, np_, timeout=240):
