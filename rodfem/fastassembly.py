@@ -33,10 +33,10 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from . import cbuild, petsc_raw
+
 SPARSE_ENOUGH = 1 / 3   # keep the pattern of possible nonzeros when it has at most this share of DOLFINx's
 DRAWS = (1.0, 1e-3)     # scales of the random states that find the possible nonzeros
-
-from . import cbuild, petsc_raw
 
 C_SOURCE = r"""
 #include <stdint.h>
@@ -227,7 +227,7 @@ class FastJacobian:
                 and V0.dofmap.index_map_bs == 1 and V0.dofmap.bs == 1
                 and set(J.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet})
 
-    def __init__(self, J, bcs, compress=True):
+    def __init__(self, J, bcs):
         from dolfinx.fem import IntegralType
         from dolfinx.fem import petsc as fpetsc
         self.J, self.bcs = J, list(bcs)
@@ -268,8 +268,8 @@ class FastJacobian:
                     cells, facets = np.ascontiguousarray(dom[:, 0]), np.ascontiguousarray(dom[:, 1])
                 self.integrals.append((itype, i, address, cells, facets))
         self.comm = mesh.comm
-        masks = self._element_masks() if compress else None
-        share = self.comm.allreduce(max((m.mean() for m in masks), default=1.0), op=MPI.MAX) if masks else 1.0
+        masks = self._element_masks()
+        share = self.comm.allreduce(max((m.mean() for m in masks), default=1.0), op=MPI.MAX)
         if share <= SPARSE_ENOUGH:
             self.A = self._matrix_of(masks)
         else:
@@ -289,7 +289,6 @@ class FastJacobian:
         Ad, Ao, garray = petsc_raw.blocks(self.A)
         self.diag = _Block(Ad)
         self.off = _Block(Ao) if Ao is not None else None
-        self.garray = garray
         self.ghost_col = np.zeros(1, np.int32)
         im = self.V.dofmap.index_map
         if self.off is not None:

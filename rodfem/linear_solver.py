@@ -185,7 +185,7 @@ class InterfaceSchur:
 
     def reset(self, pc):
         self.pattern = None
-        self.ready = False
+        self.ready = self.failed = False
 
     def destroy(self, pc):
         self.release()

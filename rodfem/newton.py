@@ -56,7 +56,8 @@ LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
 # joints) is a zero pivot.  Next comes the partial LU of rodfem/partial_lu.py (the parallel
 # solver's, here with no interface), which orders the multipliers after the dofs they constrain:
 # on the 3D rod's Jacobian (1024 elements, 73,758 unknowns, only its possible nonzeros:
-# rodfem/fastassembly.py) it factors in 40 ms and solves in 2.6 ms; PETSc's LU in AMD order meets
+# rodfem/fastassembly.py) it factors in 27 ms and solves in 1.9 ms (in AMD order, the least fill of
+# the orders it tries); PETSc's LU in AMD order meets
 # a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
 # -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
 # Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
@@ -256,7 +257,7 @@ class Newton:
         if name == "schur":
             from . import petsc_raw
             pc.setPythonType(LU_CHAIN[name]["pc_python_type"])
-            petsc_raw.pc_clear_failure(pc)
+            petsc_raw.pc_set_failed(pc, False)
             return
         pc.setFactorSolverType(LU_CHAIN[name]["pc_factor_mat_solver_type"])
         if "pc_factor_mat_ordering_type" in LU_CHAIN[name]:

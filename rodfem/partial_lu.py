@@ -184,8 +184,8 @@ def interior_order(ki, kj, nI, nG, method, postpone=None, reverse=False):
     nI..) last.
 
     `postpone` (bool, interior rows): dofs with a zero diagonal (multipliers of constraints) are
-    left out of the fill-reducing order and placed after the last of their neighbours: their pivot
-    is then the Schur complement -B A^{-1} B^T of the dofs they constrain, not zero (the LU does not
+    left out of the fill-reducing order and placed after their partners (below): their pivot is
+    then the Schur complement -B A^{-1} B^T of the dofs they constrain, not zero (the LU does not
     pivot).  (Ordered with the rest, the multipliers cost the 3D rod's RCM band 40 % more fill.)"""
     import scipy.sparse as sp
     from petsc4py import PETSc
@@ -204,8 +204,9 @@ def interior_order(ki, kj, nI, nG, method, postpone=None, reverse=False):
 
     # the fill-reducing order of the dofs with a pivot of their own that do not couple to the
     # interface; those that do come last (an interface row's fill is then the U rows of these
-    # only), the postponed ones are placed after their neighbours below.  (Ordered with the
-    # rest and moved last afterwards, the dofs next to the interface cost AMD 50 % more fill.)
+    # only), the postponed ones are placed after their partners below.  (Keeping the dofs next to
+    # the interface last costs AMD fill: 4.1 on a rank's half of the 3D rod at 1024 elements,
+    # against 2.8 for the same block without them last; RCM, 3.7, is then chosen.)
     near = np.zeros(nI, bool)
     if nG:
         near[(K[:nI, nI:] + K[nI:, :nI].T).tocoo().row] = True

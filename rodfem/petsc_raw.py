@@ -4,7 +4,7 @@
   (MatMPIAIJGetSeqAIJ), the CSR structure of a sequential AIJ block (MatGetRowIJ) and its
   value array (MatSeqAIJGetArray / MatSeqAIJRestoreArray: the restore marks it changed; or the
   Read variants, which do not);
-- why a PC failed (PCGetFailedReason: a zero pivot in a factorization), and forgetting it.
+- why a PC failed (PCGetFailedReason: a zero pivot in a factorization), and setting it.
 
 The library is the one petsc4py has loaded (same process, same handles).  PetscInt must be
 32-bit (Debian's PETSc); callers check `usable()`.
@@ -112,15 +112,12 @@ def pc_failed(pc):
     return reason.value != 0
 
 
-def pc_clear_failure(pc):
-    """PCSetFailedReason(pc, PC_NOERROR): a python PC put in place of a failed LU does not
-    set it itself, and KSP would report the LU's failure (DIVERGED_PC_FAILED) for it."""
-    _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(0)), "PCSetFailedReason")
-
-
-def pc_set_failed(pc):
-    """PCSetFailedReason(pc, PC_FACTOR_NUMERIC_ZEROPIVOT): a python PC's factorization met a zero pivot."""
-    _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(2)), "PCSetFailedReason")
+def pc_set_failed(pc, failed=True):
+    """PCSetFailedReason: PC_FACTOR_NUMERIC_ZEROPIVOT (a python PC's factorization met a zero pivot)
+    or PC_NOERROR (a python PC put in place of a failed LU does not clear the LU's failure itself,
+    and KSP would report it, DIVERGED_PC_FAILED, for the new PC)."""
+    reason = 2 if failed else 0
+    _check(lib().PCSetFailedReason(ctypes.c_void_p(pc.handle), ctypes.c_int(reason)), "PCSetFailedReason")
 
 
 def nonzero_state(A):
