@@ -18,14 +18,14 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem import run
-from rodfem.newton import NewtonFailure
+from rodfem.nls.newton import NewtonFailure
 
-from demos import flying_spaghetti_3d
+from rodfem.demos import flying_spaghetti_3d
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # Newton variants.  "default" is what the 3D scenes use (demos/_rod3d.py NEWTON:
 # chord Newton reusing the Jacobian and its LU over 8 iterations, across steps,
-# full-Newton retry on failure; the partial LU of rodfem/partial_lu.py, which orders
+# full-Newton retry on failure; the partial LU of rodfem/la/partial_lu.py, which orders
 # the multipliers after the dofs they constrain, after PETSc's LU meets their zero
 # pivots).  "full": a fresh Jacobian every iteration.  (PETSc's own LU reordered for
 # a nonzero diagonal, -pc_factor_nonzeros_along_diagonal, is not a variant: it crashed

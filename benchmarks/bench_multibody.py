@@ -16,7 +16,7 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.scene import load
+from rodfem.app.scene import load
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

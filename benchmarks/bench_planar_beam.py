@@ -17,7 +17,7 @@ import tempfile
 import numpy as np
 
 from rodfem import run
-from rodfem.scene import load
+from rodfem.app.scene import load
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -42,7 +42,7 @@ def cost(n, steps=150, repeats=3):
 
 
 def setup_time(cache):
-    code = ("import time; t=time.perf_counter(); from rodfem.scene import load; from mpi4py import MPI; "
+    code = ("import time; t=time.perf_counter(); from rodfem.app.scene import load; from mpi4py import MPI; "
             "s=load('flying-spaghetti-2d'); s.build(s.values(), MPI.COMM_WORLD); print(time.perf_counter()-t)")
     env = dict(os.environ, XDG_CACHE_HOME=cache)
     return float(subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,

@@ -23,8 +23,8 @@ from mpi4py import MPI
 
 from rodfem import run
 
-from demos import _slider_crank_reference as exact
-from demos import slider_crank_3d
+from rodfem.demos import _slider_crank_reference as exact
+from rodfem.demos import slider_crank_3d
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DTS = (0.01, 0.005, 0.002, 0.001, 0.0005)

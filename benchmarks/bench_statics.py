@@ -1,4 +1,4 @@
-"""Static roll-up and helix (rodfem/statics.py): the error against the exact circle/helix over the mesh,
+"""Static roll-up and helix (rodfem/analysis/statics.py): the error against the exact circle/helix over the mesh,
 with two load-step schedules, and the observed spatial order -> statics.md.
 
     .venv/bin/python benchmarks/bench_statics.py [--out benchmarks]     (about 3 minutes)
@@ -10,8 +10,8 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from rodfem.scene import load
-from rodfem.statics import Statics
+from rodfem.app.scene import load
+from rodfem.analysis.statics import Statics
 
 CASES = [("roll-up-2d", {}, (8, 16, 32, 64)), ("roll-up-2d", {"turns": 10.0}, (64,)),
          ("roll-up-3d", {}, (8, 16, 32, 64, 128)), ("helix-3d", {}, (8, 16, 32, 64, 128))]

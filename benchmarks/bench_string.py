@@ -23,13 +23,13 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem import Load, Problem, Support, run
-from rodfem.driver import run_scene
+from rodfem.app.driver import run_scene
 
-from demos.crane_manoeuvre import scene as crane
-from demos.hanging_cable import scene as hanging
-from demos.taut_string_wave import scene as wave, speeds
-from forms.string import String
-from forms.string_materials import MATERIALS, tension_only
+from rodfem.demos.crane_manoeuvre import scene as crane
+from rodfem.demos.hanging_cable import scene as hanging
+from rodfem.demos.taut_string_wave import scene as wave, speeds
+from rodfem.forms.string import String
+from rodfem.forms.string_materials import MATERIALS, tension_only
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 COMM = MPI.COMM_SELF

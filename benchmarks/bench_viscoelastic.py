@@ -31,11 +31,11 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem import Problem, Support, run
-from rodfem.driver import run_scene
-from rodfem.scene import load
-from forms import planar_beam, string
-from forms.string_materials import logarithmic
-from forms.viscoelastic import midpoint_factor
+from rodfem.app.driver import run_scene
+from rodfem.app.scene import load
+from rodfem.forms import planar_beam, string
+from rodfem.forms.string_materials import logarithmic
+from rodfem.forms.viscoelastic import midpoint_factor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 logging.getLogger().setLevel(logging.WARNING)

@@ -187,9 +187,9 @@ def err_of(tip, study):
 
 def rodfem_largest_dt(name, cfg, study, quick):
     """Largest dt (multiples of the scene dt) with Newton converging in every step, and its error."""
-    from rodfem.driver import run_scene
-    from rodfem.newton import NewtonFailure
-    from rodfem.scene import load
+    from rodfem.app.driver import run_scene
+    from rodfem.nls.newton import NewtonFailure
+    from rodfem.app.scene import load
     scene = load(name)
     p = scene.values(cfg["overrides"])
     out = []
@@ -208,7 +208,7 @@ def rodfem_largest_dt(name, cfg, study, quick):
 
 
 def compare(name, quick, repeats):
-    from rodfem.study import run_study, plot_study
+    from rodfem.analysis.study import run_study, plot_study
     cfg = SCENES[name]
     base = os.path.join(HERE, "compare", name)
     print(f"== {name}: rodfem study", flush=True)
@@ -217,7 +217,7 @@ def compare(name, quick, repeats):
                       elements=cfg["rodfem_elements"][:3] if quick else cfg["rodfem_elements"],
                       repeats=repeats, quiet=True)
     t_end = study["parameters"]["t_end"]
-    from rodfem.driver import run_scene
+    from rodfem.app.driver import run_scene
     energy_scale = run_scene(name, dict(cfg["overrides"], frames=1))[1]["max_abs_H"]
     rodfem_rows = [dict(tool="rodfem", scene=name, path=r["path"], n_elements=r["n_elements"], dt=r["dt"],
                         status=r["status"], error=r["error"], wall_time_s=r.get("wall_time_s"))

@@ -45,7 +45,7 @@ def worker(scene_name, n, warm, steps):
     from petsc4py import PETSc
 
     from rodfem import run
-    from rodfem.scene import load
+    from rodfem.app.scene import load
 
     comm = MPI.COMM_WORLD
     PETSc.Log.begin()
@@ -115,7 +115,7 @@ def small_step(repeats=5, steps=150):
     from mpi4py import MPI
 
     from rodfem import run
-    from rodfem.scene import load
+    from rodfem.app.scene import load
     scene = load(PLANAR)
     best = float("inf")
     for _ in range(repeats):
@@ -203,7 +203,7 @@ def write(rows, small, started, finished):
             lines += ["", f"Serial CPU time per element and step (µs): {per}; fitted exponent of the CPU time "
                           f"against n from {big[0][0]} to {big[-1][0]}: {e:.2f}."]
         lines += ["", "Where the time goes (wall ms per step, serial / np2 busiest rank): residuals F, Jacobians J, "
-                      "LU factorization (np2: the partial LU of rodfem/partial_lu.py), the solves of Newton (np2: "
+                      "LU factorization (np2: the partial LU of rodfem/la/partial_lu.py), the solves of Newton (np2: "
                       "both sweeps, the interface allreduce and solve), Z (the interface columns solved one by "
                       "one: only in the pivoting MUMPS stage, else -/0), S (the interface rows gathered and the "
                       "Schur terms summed), rest (time loop, energy, observables, waiting):", "",

@@ -42,9 +42,9 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
-from rodfem.driver import run_scene
-from rodfem.newton import DEFAULTS, NewtonFailure
-from rodfem.scene import ParameterError, scenes
+from rodfem.app.driver import run_scene
+from rodfem.nls.newton import DEFAULTS, NewtonFailure
+from rodfem.app.scene import ParameterError, scenes
 
 ATOL = DEFAULTS["snes_atol"]
 ACCURATE = 1e-2

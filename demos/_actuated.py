@@ -5,9 +5,9 @@
 # actuators whose input is not zero.)
 import numpy as np
 
-from rodfem.scene import Parameter, ParameterError, density, stiffness
+from rodfem.app.scene import Parameter, ParameterError, density, stiffness
 
-from forms.cosserat_rod import CosseratRod
+from rodfem.forms.cosserat_rod import CosseratRod
 
 # The soft arm.  Paper 1 (Kinon, Eugster, Betsch 2026, example 04) publishes
 # only the arm's length L = 0.1755, the chamber angles and the pressure

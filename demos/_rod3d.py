@@ -5,16 +5,16 @@
 import numpy as np
 
 from rodfem import Load
-from rodfem.scene import Parameter, ParameterError, density
+from rodfem.app.scene import Parameter, ParameterError, density
 
-from forms import cosserat_rod
+from rodfem.forms import cosserat_rod
 
 
 # Newton options of the 3D rod scenes: a chord Newton that reuses the
 # Jacobian and its LU over up to 8 iterations, across steps (the 102 x 102
 # element matrices make assembly + LU the cost: 3-4x faster per step than
 # full Newton, same converged steps).  If it fails in a step, the engine
-# repeats that step with full Newton (rodfem/newton.py).  The chord iteration
+# repeats that step with full Newton (rodfem/nls/newton.py).  The chord iteration
 # converges linearly, so it is driven to |F| <= 1e-12 (a few extra cheap solves)
 # to keep the balance error at the full-Newton level.
 NEWTON = {"snes_lag_jacobian": 8, "snes_lag_jacobian_persists": True, "snes_atol": 1e-12}

@@ -16,10 +16,10 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 
-from demos._planar import beam, material_parameters
+from rodfem.demos._planar import beam, material_parameters
 
 parameters = common(n_elements=10, dt=1e-3, t_end=1.0) + material_parameters() + [
     stiffness("L", 1.0, "m", "length"),

@@ -55,15 +55,15 @@ from types import SimpleNamespace
 import numpy as np
 
 from rodfem import Load, Support, System
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
 
-from demos._multibody import nodal, orthonormality, rigid_frame
-from demos.crane_manoeuvre import trolley_force
-from demos.hanging_cable import hanging_guess, material_parameters, string_model
-from forms import joints
-from forms.rigid_body import RigidBody
-from forms.string import static_equilibrium
+from rodfem.demos._multibody import nodal, orthonormality, rigid_frame
+from rodfem.demos.crane_manoeuvre import trolley_force
+from rodfem.demos.hanging_cable import hanging_guess, material_parameters, string_model
+from rodfem.forms import joints
+from rodfem.forms.rigid_body import RigidBody
+from rodfem.forms.string import static_equilibrium
 
 parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) cable length"),

@@ -53,13 +53,13 @@
 import sys
 
 from rodfem import Load, Support, System, constant_in_time
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 
 
-from forms import joints
-from forms.planar_beam import PlanarBeam, quadratic, straight
-from forms.rigid_body import PlanarRigidBody, PointMass
+from rodfem.forms import joints
+from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
+from rodfem.forms.rigid_body import PlanarRigidBody, PointMass
 
 parameters = common(n_elements=10, dt=0.05, t_end=15.0) + [
     stiffness("L", 1.0, "m", "length of the arm"),

@@ -17,10 +17,10 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, constant_in_time
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 
-from demos._planar import beam, material_parameters
+from rodfem.demos._planar import beam, material_parameters
 
 # ## Parameters (all can be changed with --set NAME=VALUE)
 parameters = common(n_elements=10, dt=0.1, t_end=15.0) + material_parameters() + [

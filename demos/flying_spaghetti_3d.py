@@ -22,10 +22,10 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, constant_in_time
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common
 
-from demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
+from rodfem.demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
 
 parameters = common(n_elements=10, dt=0.1, t_end=15.0) + [
     Parameter("variant", "planar", "", "body-fixed end moment about d3 (planar) or about the axis d1 (spatial)",

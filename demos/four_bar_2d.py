@@ -23,12 +23,12 @@ import sys
 import numpy as np
 
 from rodfem import Load, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, ParameterError, Scene, common, density, stiffness
-from rodfem.system import System
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, ParameterError, Scene, common, density, stiffness
+from rodfem.core.system import System
 
-from forms import joints
-from forms.planar_beam import PlanarBeam, quadratic, straight
+from rodfem.forms import joints
+from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 
 parameters = common(n_elements=6, dt=0.02, t_end=10.0) + [
     stiffness("E", 2.1e11, "Pa", "Young's modulus of crank and rocker"),

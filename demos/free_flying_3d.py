@@ -40,13 +40,13 @@ import sys
 import numpy as np
 
 from rodfem import Load, constant_in_time
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
-from rodfem.system import System
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
+from rodfem.core.system import System
 
-from demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
-from forms import joints
-from forms.rigid_body import RigidBody
+from rodfem.demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
+from rodfem.forms import joints
+from rodfem.forms.rigid_body import RigidBody
 
 parameters = common(n_elements=4, dt=0.05, t_end=10.0) + [
     Parameter("variant", "rods", "", "two rods joined by a spherical joint, or rod A with a rigid box welded to its end",

@@ -27,10 +27,10 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
 
-from forms.string import MATERIALS, String, map_positions, static_equilibrium
+from rodfem.forms.string import MATERIALS, String, map_positions, static_equilibrium
 
 
 # ## Parameters shared by the string scenes

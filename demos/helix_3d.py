@@ -27,11 +27,11 @@ import sys
 import numpy as np
 
 from rodfem import Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
 
-from demos._rod3d import NEWTON, end_moment, smooth_ramp, straight
-from forms.cosserat_rod import CosseratRod
+from rodfem.demos._rod3d import NEWTON, end_moment, smooth_ramp, straight
+from rodfem.forms.cosserat_rod import CosseratRod
 
 R0, HEIGHT, COILS = 10.0, 50.0, 2
 C = HEIGHT / (2 * np.pi * R0 * COILS)

@@ -55,16 +55,16 @@ import sys
 import numpy as np
 
 from rodfem import Load
-from rodfem.cli import main
-from rodfem.interconnection import ground
-from rodfem.scene import Parameter, Scene, common
-from rodfem.system import System
+from rodfem.app.cli import main
+from rodfem.core.joints import ground
+from rodfem.app.scene import Parameter, Scene, common
+from rodfem.core.system import System
 
-from forms import joints
-from forms.rigid_body import RigidBody
+from rodfem.forms import joints
+from rodfem.forms.rigid_body import RigidBody
 
 try:
-    from . import _slider_crank_reference as exact
+    from rodfem.demos import _slider_crank_reference as exact
 except ImportError:   # run as a script
     import _slider_crank_reference as exact
 

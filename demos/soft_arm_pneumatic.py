@@ -52,13 +52,13 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 
-from demos._actuated import CHAMBER_ANGLES, chamber_pressures, soft_arm_parameters, soft_arm_section, \
+from rodfem.demos._actuated import CHAMBER_ANGLES, chamber_pressures, soft_arm_parameters, soft_arm_section, \
     soft_arm_stiffness, soft_rod
-from demos._rod3d import NEWTON, smooth_ramp, straight
-from forms import actuators
+from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
+from rodfem.forms import actuators
 
 # d1 = e_z (the axis), d2 = e_x, d3 = e_y: the chamber at angle theta sits at (cos theta, sin theta) in x, y
 DIRECTORS = (np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))

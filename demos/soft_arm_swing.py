@@ -28,12 +28,12 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Scene, common, density, stiffness
 
-from demos._actuated import smoothstep, soft_arm_parameters, soft_arm_section, soft_arm_stiffness, soft_rod
-from demos._rod3d import NEWTON, straight
-from forms import actuators
+from rodfem.demos._actuated import smoothstep, soft_arm_parameters, soft_arm_section, soft_arm_stiffness, soft_rod
+from rodfem.demos._rod3d import NEWTON, straight
+from rodfem.forms import actuators
 
 # hanging: d1 = -e_z (the axis), d2 = e_x, d3 = d1 x d2 = -e_y
 DIRECTORS = (np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, -1.0, 0.0]))

@@ -29,11 +29,11 @@ import sys
 import numpy as np
 
 from rodfem import Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
 
-from demos.hanging_cable import material_parameters, string_model
-from forms.string import MATERIALS
+from rodfem.demos.hanging_cable import material_parameters, string_model
+from rodfem.forms.string import MATERIALS
 
 parameters = common(n_elements=100, dt=2e-3, t_end=0.16, integrator="discrete-gradient", frames=20) + \
     material_parameters(material="kirchhoff", EA=100.0) + [
@@ -57,7 +57,7 @@ def build(p, comm):
     lam, a, sig, s0 = p["stretch"], p["amplitude"], p["width"], p["s0"]
     N, c_s, c = speeds(p)
     if not N > 0:
-        from rodfem.scene import ParameterError
+        from rodfem.app.scene import ParameterError
         raise ParameterError(f"parameter 'stretch': the material {p['material']} has no tension at "
                              f"lambda_0 = {lam:g} (N = {N:g})")
 

@@ -35,12 +35,12 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, density, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 
-from demos._rod3d import NEWTON, smooth_ramp, straight
-from forms import actuators
-from forms.cosserat_rod import CosseratRod
+from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
+from rodfem.forms import actuators
+from rodfem.forms.cosserat_rod import CosseratRod
 
 # d1 = e_z (the axis), d2 = e_x, d3 = e_y: tendon i at offset (cos, sin)(i pi/2) in (x, y), as in Till's code
 DIRECTORS = (np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))

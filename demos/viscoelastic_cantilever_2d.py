@@ -30,12 +30,12 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, stiffness
 
-from demos import cantilever_2d
-from demos._planar import MATERIALS
-from forms import planar_beam
+from rodfem.demos import cantilever_2d
+from rodfem.demos._planar import MATERIALS
+from rodfem.forms import planar_beam
 
 _elastic = {q.name: q for q in cantilever_2d.parameters}
 

@@ -37,11 +37,11 @@ import sys
 import numpy as np
 
 from rodfem import Load, Problem, Support
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common, stiffness
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common, stiffness
 
-from demos._rod3d import NEWTON, end_moment, straight
-from forms import cosserat_rod
+from rodfem.demos._rod3d import NEWTON, end_moment, straight
+from rodfem.forms import cosserat_rod
 
 parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     stiffness("L", 1.0, "m", "length"),

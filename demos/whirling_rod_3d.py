@@ -19,10 +19,10 @@ import sys
 import numpy as np
 
 from rodfem import Problem
-from rodfem.cli import main
-from rodfem.scene import Parameter, Scene, common
+from rodfem.app.cli import main
+from rodfem.app.scene import Parameter, Scene, common
 
-from demos._rod3d import NEWTON, material_parameters, rod, straight
+from rodfem.demos._rod3d import NEWTON, material_parameters, rod, straight
 
 parameters = common(n_elements=8, dt=0.01, t_end=5.0) + [
     Parameter("L", 1.0, "m", "length", low=0, low_open=True),

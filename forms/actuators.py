@@ -91,10 +91,10 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from rodfem.scene import ParameterError
+from rodfem.app.scene import ParameterError
 
-from forms import cosserat_rod
-from forms.cosserat_rod import DIRECTORS, RATES
+from rodfem.forms import cosserat_rod
+from rodfem.forms.cosserat_rod import DIRECTORS, RATES
 
 # --------------------------------------------------------------------------------------------
 # Routings y(s): one function for UFL and numpy (lib = ufl or numpy), with run-time numbers.
@@ -189,7 +189,7 @@ def fibre_tangent_rate(xm, w, y):
     if _is_rod(xm):
         gamma, kappa = rod_strain_rates(xm, w)
         return gamma + ufl.cross(kappa, ufl.as_vector([0.0, y[0], y[1]]))
-    from forms.planar_beam import S_HAT, rotation
+    from rodfem.forms.planar_beam import S_HAT, rotation
     gamma = rotation(xm["phi"]).T * (w["v"].dx(0) - w["omega"] * S_HAT * xm["r"].dx(0))
     return ufl.as_vector([gamma[0] - y[0] * w["omega"].dx(0), gamma[1]])
 
@@ -213,7 +213,7 @@ def _history(value, what):
 class _Actuator:
     """What the actuators share: an input history, a routing, a segment, run-time constants.
 
-    The port protocol of rodfem/body.py: bind(mesh, space), update(t),
+    The port protocol of rodfem/core/body.py: bind(mesh, space), update(t),
     input_map(step, test, dx, ds), power(step, dx, ds), observables(X, dx, ds), name.
     """
     value: object

@@ -93,11 +93,11 @@ moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
 import numpy as np
 import ufl
 
-from rodfem.interconnection import Frame
-from rodfem.materials import ParameterSet
-from rodfem.model import Field
+from rodfem.core.joints import Frame
+from rodfem.core.materials import ParameterSet
+from rodfem.core.model import Field
 
-from forms.viscoelastic import Maxwell, active, row_scale
+from rodfem.forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
 RATES = ("w1", "w2", "w3")
@@ -210,7 +210,7 @@ class CosseratRod:
     frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
     flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
-    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {**{d: (f"director {d} (d1 the axis, d2 and d3 span the section)", ("x", "y", "z")) for d in DIRECTORS},
               "v": ("velocity d_t r of the centreline", ("x", "y", "z")),
               **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
@@ -350,7 +350,7 @@ class CosseratRod:
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""
         return {}
 
-    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # -- statics and modes (rodfem/analysis/statics.py, rodfem/analysis/linearize.py) -------------------
     # At rest the compliance rows and the velocity-level constraint rows are empty; these
     # total-form rows replace them (the rows tested with `static_fields`):
     #     C_N (N - N_ref) = Pi(Gamma(q) - Gamma(q_ref)),   C_M (M - M_ref) = Pi(K(q) - K(q_ref)),

@@ -2,7 +2,7 @@
 
 Each joint is a function g(a, b, a0, b0) of the two points' frames now (a, b)
 and at t = 0 (a0, b0): `a.x` the position, `a.d` the directors (3D bodies),
-`a.phi` the angle (planar bodies).  rodfem (rodfem/interconnection.py)
+`a.phi` the angle (planar bodies).  rodfem (rodfem/core/joints.py)
 makes it an index-2 constraint G(q_m) v_m = 0 with multipliers lambda, the
 reaction forces G^T lambda, exact for the quadratic g written here: for
 director-based bodies every pair below is quadratic in the coordinates, so

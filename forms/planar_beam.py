@@ -53,11 +53,11 @@ import numbers
 import numpy as np
 import ufl
 
-from rodfem.interconnection import Frame
-from rodfem.materials import ParameterSet, material
-from rodfem.model import Field
+from rodfem.core.joints import Frame
+from rodfem.core.materials import ParameterSet, material
+from rodfem.core.model import Field
 
-from forms.viscoelastic import Maxwell, active
+from rodfem.forms.viscoelastic import Maxwell, active
 
 S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])
 E1 = ufl.as_vector([1.0, 0.0])
@@ -71,7 +71,7 @@ def rotation(phi):
 
 def planar_frame(q, position, offset=()):
     """The point at `offset` X in the section frame: x = r + A(phi) X, and the angle phi (numbers;
-    for joints, rodfem/interconnection.py).  With an offset, x is trigonometric in phi."""
+    for joints, rodfem/core/joints.py).  With an offset, x is trigonometric in phi."""
     phi = q["phi"][0]
     x = np.asarray(q[position], dtype=float)
     if len(offset) and any(offset):
@@ -82,7 +82,7 @@ def planar_frame(q, position, offset=()):
 
 def planar_directors(phi):
     """The section frame [d1 d2 d3] (n, 3, 3) of angles phi (n,) in 3D: the plane is z = 0, d3 = e_z
-    (numbers; for pictures, rodfem/snapshot.py)."""
+    (numbers; for pictures, rodfem/io/snapshot.py)."""
     c, s = np.cos(phi), np.sin(phi)
     R = np.zeros((len(phi), 3, 3))
     R[:, 0, 0], R[:, 1, 0], R[:, 0, 1], R[:, 1, 1], R[:, 2, 2] = c, s, -s, c, 1.0
@@ -96,7 +96,7 @@ def cross(a, b):
 
 # -- materials: W(Gamma, kappa; parameters) ----------------------------------------
 # One function each; `quadratic(EA=..., GA=..., EI=...)` makes the Material
-# (rodfem/materials.py: the parameters become run-time constants, positive
+# (rodfem/core/materials.py: the parameters become run-time constants, positive
 # except the reference curvature kappa0, which may also be a UFL expression).
 
 @material(strains=2, signed=("kappa0",))
@@ -156,7 +156,7 @@ class PlanarBeam:
     position = "r"
     flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
-    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {"phi": ("section angle phi (rad, unwrapped): d1 = (cos phi, sin phi)", ()),
               "v": ("velocity d_t r of the centreline", ("x", "y")),
               "omega": ("angular velocity d_t phi of the section", ()),
@@ -265,7 +265,7 @@ class PlanarBeam:
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""
         return {"Gamma": rotation(x["phi"]).T * x["r"].dx(0) - E1, "kappa": x["phi"].dx(0)}
 
-    # -- statics and modes (rodfem/statics.py, rodfem/linearize.py) -------------------
+    # -- statics and modes (rodfem/analysis/statics.py, rodfem/analysis/linearize.py) -------------------
     # At rest the strain rows above are empty (their rates and the velocities vanish):
     # the strains are then fixed by these total-form rows, which replace the rows
     # tested with `static_fields`.  Gamma = Pi(A^T r' - e1), kappa = Pi(phi') (Pi: the

@@ -18,7 +18,7 @@ With d_i' = omega x d_i, sum_i E_i |w_i|^2 = omega . J omega for the inertia
 tensor J = diag(J_1, J_2, J_3) about the principal axes d_i, through
 E_k = (J_1 + J_2 + J_3)/2 - J_k (>= 0 by the triangle inequality of J).
 
-The body lives on a mesh of one unit cell (rodfem/body.py): every field is
+The body lives on a mesh of one unit cell (rodfem/core/body.py): every field is
 DG0, so int f dx = f and the forms below are the equations themselves.
 Discretized like the rod: midpoint values, lambda at t_{n+1}; the
 constraint rows hold exactly, so d_i . d_j = delta_ij for all time.
@@ -26,12 +26,12 @@ constraint rows hold exactly, so d_i . d_j = delta_ij for all time.
 import numpy as np
 import ufl
 
-from rodfem.interconnection import Frame
-from rodfem.materials import ParameterSet
-from rodfem.model import Field
+from rodfem.core.joints import Frame
+from rodfem.core.materials import ParameterSet
+from rodfem.core.model import Field
 
-from forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
-from forms.planar_beam import planar_directors, planar_frame
+from rodfem.forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
+from rodfem.forms.planar_beam import planar_directors, planar_frame
 
 
 class PointMass:
@@ -62,7 +62,7 @@ class PointMass:
     def compatible_strains(self, x):
         return {}
 
-    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+    static_fields = ()   # statics: no rows to replace (rodfem/analysis/statics.py)
 
     def static_rows(self, x, ref, test, dx, ds):
         return None
@@ -125,7 +125,7 @@ class PlanarRigidBody:
     def compatible_strains(self, x):
         return {}
 
-    static_fields = ()   # statics: no rows to replace (rodfem/statics.py)
+    static_fields = ()   # statics: no rows to replace (rodfem/analysis/statics.py)
 
     def static_rows(self, x, ref, test, dx, ds):
         return None
@@ -214,7 +214,7 @@ class RigidBody:
     def compatible_strains(self, x):
         return {}
 
-    # statics and modes (rodfem/statics.py): d_i . d_j - delta_ij = 0 replaces the velocity-level row
+    # statics and modes (rodfem/analysis/statics.py): d_i . d_j - delta_ij = 0 replaces the velocity-level row
     static_fields = ("lam",)
 
     def static_rows(self, x, ref, test, dx, ds):

@@ -40,7 +40,7 @@ The coupling terms cancel and
 
 exactly (to solver tolerance) for ANY W: grad_bar W (C_{n+1} - C_n) =
 W(C_{n+1}) - W(C_n) is Gonzalez' property (`step.effort` of the engine,
-rodfem/integrators.py: for a scalar C the difference quotient, with a
+rodfem/core/integrators.py: for a scalar C the difference quotient, with a
 third-order Taylor fall-back where |C_{n+1} - C_n| <= 1e-3).  With the midpoint rule
 S = 2 W'(C_m) (`step.effort`) the balance is exact only for W quadratic in
 C (kirchhoff); its error per unit length is W'''(C_m) dC^3 / 24.
@@ -76,15 +76,15 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from rodfem import compat
-from rodfem.interconnection import Frame
-from rodfem.materials import ParameterSet
-from rodfem.model import Field
-from rodfem.newton import Newton
-from rodfem.ports import ENDS
+from rodfem.fem import compat
+from rodfem.core.joints import Frame
+from rodfem.core.materials import ParameterSet
+from rodfem.core.model import Field
+from rodfem.nls.newton import Newton
+from rodfem.core.ports import ENDS
 
-from forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
-from forms.viscoelastic import Maxwell, active
+from rodfem.forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
+from rodfem.forms.viscoelastic import Maxwell, active
 
 
 def maxwell(tau, EA, law=logarithmic):
@@ -110,7 +110,7 @@ class String:
         return Frame(x=np.asarray(q["r"], dtype=float))
     fields = [Field("r", "P", 1, (3,)), Field("v", "P", 1, (3,)), Field("C", "DG", 0)]
     quadrature_degree = 2   # exact for every term: rhoA v.dv is quadratic, the rest cellwise constant
-    # what the output writes (rodfem/snapshot.py): descriptions and component names
+    # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {"v": ("velocity d_t r", ("x", "y", "z")),
               "C": ("strain C = d_s r . d_s r (the state's field)", ()),
               "stretch": ("stretch sqrt(C) = |d_s r|", ()),
@@ -196,7 +196,7 @@ class String:
         relaxed = {f"C_{k}": _ones for k in range(1, len(self.branches) + 1)}
         return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0)), **relaxed}
 
-    # statics and modes (rodfem/statics.py): the total-form row C = |d_s r|^2 replaces the rate row of C
+    # statics and modes (rodfem/analysis/statics.py): the total-form row C = |d_s r|^2 replaces the rate row of C
     static_fields = ("C",)
 
     def static_rows(self, x, ref, test, dx, ds):

@@ -15,7 +15,7 @@ parameters, decorated with `@material` -- `biot` below is the example:
         # docstring: the formula, W = EA/2 (sqrt(C) - 1)^2, N = EA (lambda - 1)
         return EA / 2 * (ufl.sqrt(C) - 1) ** 2
 
-`biot(EA=10.0)` then is a `Material` (rodfem/materials.py) the string model
+`biot(EA=10.0)` then is a `Material` (rodfem/core/materials.py) the string model
 takes; every parameter must be a positive number (checked: one-line
 ValueError), and the parameters enter the compiled forms as run-time
 constants, so changing a value does not recompile.  Add the name to MATERIALS to make it selectable
@@ -26,7 +26,7 @@ small-strain stiffness, and state where W is defined (e.g. C > 0).
 """
 import ufl
 
-from rodfem import materials
+from rodfem.core import materials
 
 
 class Material(materials.Material):

@@ -16,7 +16,7 @@ R_k = 1/eta_k >= 0 on their co-energies:
     d_t e_k = d_t eps - R_k sigma_k          (E x' = (J - R) z + B u)
     d_t H = - sum_k sigma_k . R_k sigma_k + y.u
 
-Discretely (rodfem/integrators.py), with z_k = the step's effort of W_k (the
+Discretely (rodfem/core/integrators.py), with z_k = the step's effort of W_k (the
 midpoint gradient, or Gonzalez' discrete gradient) tested with itself, the
 step's balance is exact:
 
@@ -40,7 +40,7 @@ branch alone).
 
 Declaring a branch (no engine code involved): each model has a helper,
 
-    from forms import string, planar_beam, cosserat_rod
+    from rodfem.forms import string, planar_beam, cosserat_rod
     string.String(logarithmic(EA=10), rhoA, branches=[string.maxwell(tau=0.02, EA=10)])
     planar_beam.PlanarBeam(rhoA, rhoI, quadratic(EA, GA, EI),
                            branches=[planar_beam.maxwell(tau=0.05, EA=0.1 * EA, GA=0.1 * GA, EI=0.1 * EI)])
@@ -53,7 +53,7 @@ import math
 
 import numpy as np
 
-from rodfem.materials import ParameterSet
+from rodfem.core.materials import ParameterSet
 
 
 class Maxwell:

@@ -5,7 +5,7 @@ Exit codes of the command line (README, "Exit codes"):
 * 0   completed;
 * 2   bad input or environment (`InputError`: a parameter, ``--out``, the JIT
       cache, a PETSc option, not enough memory);
-* 3   numerical failure (`rodfem.newton.NewtonFailure`);
+* 3   numerical failure (`rodfem.nls.newton.NewtonFailure`);
 * 130 / 143  interrupted by SIGINT / SIGTERM (`Interrupted`: 128 + signal number).
 
 Under MPI every rank must raise the same error at the same point, or the

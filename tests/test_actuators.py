@@ -16,13 +16,13 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Load, Problem, Support, run
-from rodfem.scene import ParameterError
+from rodfem.app.scene import ParameterError
 
-from demos import soft_arm_pneumatic, soft_arm_swing, tendon_arm
-from demos._rod3d import NEWTON, smooth_ramp, straight
-from forms import actuators as act
-from forms.cosserat_rod import CosseratRod
-from forms.planar_beam import PlanarBeam, quadratic
+from rodfem.demos import soft_arm_pneumatic, soft_arm_swing, tendon_arm
+from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
+from rodfem.forms import actuators as act
+from rodfem.forms.cosserat_rod import CosseratRod
+from rodfem.forms.planar_beam import PlanarBeam, quadratic
 
 COMM = MPI.COMM_WORLD
 
@@ -228,7 +228,7 @@ def test_planar_beam_ports_balance():
 def test_zero_inputs_change_nothing():
     """tau = 0 and p = 0 (as numbers and as functions of t): the history and the state equal the
     unactuated rod's to round-off (gravity on, 50 steps).  (Not bit for bit: the actuators' terms
-    are possible nonzeros of the Jacobian, rodfem/fastassembly.py, so its pattern and the LU's
+    are possible nonzeros of the Jacobian, rodfem/fem/fastassembly.py, so its pattern and the LU's
     elimination order differ.)"""
     rod = CosseratRod(1.0, [0.02, 0.01, 0.01], [1e-3, 1e-3, 1e-3], [1e-1, 1e-1, 1e-1])
     gravity = Load("v", [0.0, 0.0, -9.81], "domain", "gravity")
@@ -254,7 +254,7 @@ def test_zero_inputs_change_nothing():
 
 def test_only_used_actuators_are_assembled():
     """Scenes assemble only the actuators whose input is not identically zero; other scenes none."""
-    from demos import roll_up_3d
+    from rodfem.demos import roll_up_3d
     P, _ = build(tendon_arm.scene)
     assert [ld.name for ld in P.loads] == ["tendon1", "gravity"]
     P, _ = build(tendon_arm.scene, tension1=0.0, tension3=5.0, g=0.0)

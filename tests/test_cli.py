@@ -6,7 +6,7 @@ import os
 import numpy as np
 import pytest
 
-from rodfem.cli import main
+from rodfem.app.cli import main
 
 
 def read_history(path):

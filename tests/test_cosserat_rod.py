@@ -14,11 +14,11 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.scene import ParameterError
+from rodfem.app.scene import ParameterError
 
-from demos import flying_spaghetti_3d, helix_3d, roll_up_3d, whirling_rod_3d
-from demos._rod3d import orthonormality_error
-from forms.cosserat_rod import director_masses
+from rodfem.demos import flying_spaghetti_3d, helix_3d, roll_up_3d, whirling_rod_3d
+from rodfem.demos._rod3d import orthonormality_error
+from rodfem.forms.cosserat_rod import director_masses
 
 COMM = MPI.COMM_WORLD
 
@@ -152,7 +152,7 @@ def test_objectivity_under_a_superposed_rotation():
     1.0 |N|, 0.2 |M| and 0.15 |r| (its H still agrees to 3e-12).
     """
     from rodfem import Problem
-    from forms.cosserat_rod import RATES, CosseratRod
+    from rodfem.forms.cosserat_rod import RATES, CosseratRod
     vectors = ("r", "d1", "d2", "d3", "v", *RATES)
     E = np.eye(3)
 
@@ -269,7 +269,7 @@ def test_kirchhoff_rod_under_a_tip_force_matches_the_elastica():
     put the tip 0.51 L away; an extensible rod with EA = 1e4 EI/L^2 already ends 3.7e-4 L away.
     """
     from rodfem import Load, Problem, Support
-    from demos._rod3d import smooth_ramp, straight
+    from rodfem.demos._rod3d import smooth_ramp, straight
     rod = build(helix_3d.scene, n_elements=2, constraint="kirchhoff")[0].model
     assert np.allclose(rod.C_M, 1.0)
     F = np.array([2.0, 0.0, -3.0])
@@ -332,8 +332,8 @@ def test_cantilever_tip_force_no_locking(slenderness):
     EA = 12 slenderness^2, GA = 5/6 G A = 5 slenderness^2.  The linear ramp makes the
     load-stepped statics exact in the linear regime (deflection 1e-4 L)."""
     from rodfem import Load, Problem, Support, ramp
-    from demos._rod3d import straight
-    from forms.cosserat_rod import CosseratRod
+    from rodfem.demos._rod3d import straight
+    from rodfem.forms.cosserat_rod import CosseratRod
     EI, EA, GA, F = 1.0, 12 * slenderness ** 2, 5 * slenderness ** 2, 3e-4
     exact = -F * (1 / (3 * EI) + 1 / GA)
     for n in (1, 2):
@@ -430,8 +430,8 @@ def test_pinned_rod_under_gravity_and_distributed_moment():
     the rod swings down through the vertical; balance per step, pinned end, orthonormality.
     Measured: balance 2.9e-16 max|H|, drift of H - supplied 1.1e-15 max|H|; bounds 1e-11."""
     from rodfem import Load, Problem, Support, constant_in_time
-    from demos._rod3d import end_moment, straight
-    from forms.cosserat_rod import CosseratRod
+    from rodfem.demos._rod3d import end_moment, straight
+    from rodfem.forms.cosserat_rod import CosseratRod
     rod = CosseratRod(1.0, [0.02, 0.01, 0.01], [1e-4, 1e-4, 1e-4], [1e-2, 1e-2, 1e-2])
     loads = [Load("v", [0.0, 0.0, -9.81], "domain", "gravity"),
              end_moment(constant_in_time([0.0, 0.5, 0.0], until=0.5), "spatial", where="domain",

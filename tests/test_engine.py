@@ -3,7 +3,7 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.scene import load
+from rodfem.app.scene import load
 
 
 def spaghetti(newton_options=None, **overrides):
@@ -11,13 +11,13 @@ def spaghetti(newton_options=None, **overrides):
     p = scene.values({"t_end": 5.0, **overrides})
     problem = scene.build(p, MPI.COMM_WORLD)
     if newton_options is not None:  # rebuild the Newton solver with other settings
-        from rodfem.newton import Newton
+        from rodfem.nls.newton import Newton
         problem.newton = Newton(problem.F, problem.J, problem.x1, problem.newton.bcs, options=newton_options)
     return problem, p
 
 
 def test_chord_newton_falls_back_to_full_newton_and_agrees(monkeypatch):
-    from rodfem.newton import Newton
+    from rodfem.nls.newton import Newton
     retries = []
     full_newton = Newton._solve_full_newton
     monkeypatch.setattr(Newton, "_solve_full_newton", lambda self, *a: retries.append(a) or full_newton(self, *a))
@@ -59,7 +59,7 @@ def test_material_values_are_constants_not_compiled_in(rodfem, tmp_path):
 def test_material_parameter_checks():
     import pytest
     import ufl
-    from forms.planar_beam import quadratic
+    from rodfem.forms.planar_beam import quadratic
     with pytest.raises(ValueError, match="parameter EI must be a positive number"):
         quadratic(EA=1.0, GA=1.0, EI=0.0)
     quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=-0.5)                       # signed: any number

@@ -1,4 +1,4 @@
-"""The linearized PH model (rodfem/linearize.py): structure, frequencies against the analytic ones,
+"""The linearized PH model (rodfem/analysis/linearize.py): structure, frequencies against the analytic ones,
 the response to a small input against the nonlinear model, the exported files, bad input."""
 import csv
 import json
@@ -10,8 +10,8 @@ import scipy.sparse as sp
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.linearize import Linearization, natural_modes, prepare
-from rodfem.scene import ParameterError, load
+from rodfem.analysis.linearize import Linearization, natural_modes, prepare
+from rodfem.app.scene import ParameterError, load
 
 J0_ZEROS = np.array([2.404825557695773, 5.520078110286311, 8.653727912911013])   # zeros of the Bessel J0
 BETA_L = np.array([1.8751040687119611, 4.6940911329741745, 7.8547574382376126])  # cantilever cos(bL)cosh(bL) = -1
@@ -153,8 +153,8 @@ def test_system_of_two_welded_beams_has_the_modes_of_one_beam():
     """A cantilever of two beams (4 + 4 elements) welded by a planar rigid joint: the joint's three
     multipliers are states (E = 0 rows), the frequencies equal those of one beam of 8 elements."""
     from rodfem import Support, System
-    from forms import joints
-    from forms.planar_beam import PlanarBeam, quadratic, straight
+    from rodfem.forms import joints
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
     beam = PlanarBeam(0.785, 1e-9, quadratic(EA=2.1e7, GA=1e9, EI=175.0))
     system = System()
     a = system.add("a", beam, n_elements=4, supports=[Support("left", "clamped")], shape=straight((0, 0), (0.5, 0)))

@@ -14,9 +14,9 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.scene import load, scenes
+from rodfem.app.scene import load, scenes
 
-from demos._multibody import orthonormality
+from rodfem.demos._multibody import orthonormality
 
 COMM = MPI.COMM_WORLD
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

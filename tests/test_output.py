@@ -1,4 +1,4 @@
-"""What a run writes for a rod user (issue 15): the files are read back (rodfem.vtk.read_vtp, the
+"""What a run writes for a rod user (issue 15): the files are read back (rodfem.io.vtk.read_vtp, the
 standard library's XML) and checked against the model's own values, not against the writer's code.
 
 - centreline/: one polyline per body through the nodes in order of s; its points are the state's;
@@ -21,11 +21,11 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Problem
-from rodfem.output import OutDir, RunWriter
-from rodfem.scene import load
-from rodfem.sections import RECTANGLE
-from rodfem.timeloop import run, steps_for
-from rodfem.vtk import read_pvd, read_vtp
+from rodfem.io.output import OutDir, RunWriter
+from rodfem.app.scene import load
+from rodfem.io.sections import RECTANGLE
+from rodfem.analysis.timeloop import run, steps_for
+from rodfem.io.vtk import read_pvd, read_vtp
 
 COMM = MPI.COMM_WORLD
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -74,7 +74,7 @@ R_ARC, L_ARC, N_ARC = 2.0, 3.0, 6
 def arc_beam():
     """A free planar beam bent into a circular arc (radius 2) at rest, with compatible strains: it
     springs open.  Gamma(0) = A(phi_m)^T (chord / h) - e1 cell by cell (nonzero), kappa = 1/R."""
-    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     beam = PlanarBeam(1.0, 0.1, quadratic(EA=100.0, GA=50.0, EI=2.0))
     initial = {"r": lambda x: np.vstack([R_ARC * np.sin(x[0] / R_ARC), R_ARC * (1 - np.cos(x[0] / R_ARC))]),
                "phi": lambda x: x[0] / R_ARC}
@@ -139,7 +139,7 @@ def test_planar_beam_polyline_surface_strains_and_frames(tmp_path):
 # -- the 3D rod: the helix (statics, zero densities) ------------------------------------------------------
 
 def test_helix_strains_moments_surface_and_no_velocities(tmp_path):
-    import demos.helix_3d as helix
+    import rodfem.demos.helix_3d as helix
     problem, result, p = scene_run("helix-3d", tmp_path, frames=3, section=1.0)
     frames = series(tmp_path)
     assert [t for t, *_ in frames] == [0.0, 0.5, 1.0] and gif_frames(tmp_path / "animation.gif") == 3
@@ -224,7 +224,7 @@ def test_crane_payload_parts_rigid_box_and_string_tube(tmp_path):
 # -- the command line: frames, pictures ------------------------------------------------------------------
 
 def test_run_writes_frames_surface_animation(tmp_path):
-    from rodfem.cli import main
+    from rodfem.app.cli import main
     assert main(["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=1.5",
                  "--set", "frames=6", "--quiet", "--out", str(tmp_path)]) == 0
     for kind in ("centreline", "surface"):

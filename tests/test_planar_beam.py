@@ -4,8 +4,8 @@ import pytest
 from dolfinx import fem
 
 from rodfem import Problem, run
-from rodfem.driver import run_scene
-from forms.planar_beam import PlanarBeam, log_axial, quadratic
+from rodfem.app.driver import run_scene
+from rodfem.forms.planar_beam import PlanarBeam, log_axial, quadratic
 
 L = 10.0
 

@@ -17,7 +17,7 @@ import time
 import numpy as np
 import pytest
 
-from rodfem.cli import main
+from rodfem.app.cli import main
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RODFEM = os.path.join(os.path.dirname(sys.executable), "rodfem")
@@ -97,7 +97,7 @@ def test_bad_out_is_one_line(where, capsys, tmp_path):  # 9
 def test_memory_estimate_refuses_what_cannot_fit(monkeypatch):  # 10
     from mpi4py import MPI
 
-    from rodfem import limits
+    from rodfem.common import limits
     from rodfem.errors import InputError
     monkeypatch.setattr(limits, "available_memory", lambda ranks=1: 1e9)
     assert limits.check_elements(10**5, 9, MPI.COMM_WORLD) == 10**5  # 0.95 GB
@@ -143,7 +143,7 @@ def test_frames_one_is_the_end_state(tmp_path):
 
 def test_a_full_disk_is_one_line_and_keeps_a_summary(tmp_path):  # 9: writes fail as on a full disk
     out = tmp_path / "out"
-    code = ("import resource, sys\nfrom rodfem.cli import main\n"
+    code = ("import resource, sys\nfrom rodfem.app.cli import main\n"
             "resource.setrlimit(resource.RLIMIT_FSIZE, (12000, 12000))\n"  # after MPI_Init: files of at most
             # 12 kB (history.csv reaches it first; a frame of 4 elements is 4 to 6 kB)
             f"sys.exit(main({['run', *LONG, '--set', 't_end=10', '--out', str(out)]!r}))")
@@ -178,7 +178,7 @@ def test_a_bad_petsc_option_is_one_line(option, words, tmp_path):  # 12
 # -- the API (items 17, 18) ------------------------------------------------------------------------------
 
 def _roll_up(n=4):
-    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     from rodfem import Load, Problem, Support, ramp
     beam = PlanarBeam(rhoA=0.0, rhoI=0.0, energy=quadratic(EA=1e4, GA=1e4, EI=500.0))
     return Problem(beam, 10.0, n, loads=[Load("omega", ramp(2 * np.pi * 500 / 10, 1.0), "right")],
@@ -186,10 +186,10 @@ def _roll_up(n=4):
 
 
 def test_api_names_the_parameter():  # 17
-    from forms.planar_beam import PlanarBeam, quadratic
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     from rodfem import InputError, Problem
-    from rodfem.driver import run_scene
-    from rodfem.scene import ParameterError
+    from rodfem.app.driver import run_scene
+    from rodfem.app.scene import ParameterError
     with pytest.raises(ParameterError, match="'n_elements' must be an integer"):
         run_scene("roll-up-2d", {"n_elements": 2.5})
     with pytest.raises(ValueError, match="rhoA must be a number >= 0"):

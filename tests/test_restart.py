@@ -1,4 +1,4 @@
-"""Checkpoint and restart (rodfem/checkpoint.py): a resumed run repeats the uninterrupted one bit by
+"""Checkpoint and restart (rodfem/io/checkpoint.py): a resumed run repeats the uninterrupted one bit by
 bit (serial, chord Newton, a killed run, mpirun -n 2), a 2-rank checkpoint restarts on one
 process to round-off, and bad input is one line."""
 import csv
@@ -15,7 +15,7 @@ import pytest
 
 from conftest import BIN, REPO
 
-from rodfem.cli import main
+from rodfem.app.cli import main
 
 
 def history(path):

@@ -2,13 +2,13 @@
 
 - `mpirun -n 2` at 10^4 planar elements converges and gives the serial history (MUMPS, the
   old parallel default, stopped at step 1 with DIVERGED_LINEAR_SOLVE there);
-- the interface Schur complement (rodfem/linear_solver.py) solves as accurately as a direct
+- the interface Schur complement (rodfem/la/schur.py) solves as accurately as a direct
   LU, on 1, 2 and 3 ranks, with saddle points (the 3D rod's multipliers: AMD order inside);
-- the partial LU (rodfem/partial_lu.py) leaves -A_GI A_II^{-1} A_IG in its corner and solves
+- the partial LU (rodfem/la/partial_lu.py) leaves -A_GI A_II^{-1} A_IG in its corner and solves
   both sweeps exactly (against dense linear algebra), in RCM and AMD order;
 - the serial LU chain: RCM, and the partial LU (multipliers last) after the 3D rod's zero pivot,
   SuperLU when every order of the partial LU meets one;
-- the fast assembly (rodfem/fastassembly.py) gives DOLFINx's matrix entry for entry, keeps only
+- the fast assembly (rodfem/fem/fastassembly.py) gives DOLFINx's matrix entry for entry, keeps only
   the possible nonzeros where they are few (the 3D rod), and inserts an entry its pattern missed.
 """
 import json
@@ -23,8 +23,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem import run
-from rodfem.linear_solver import InterfaceSchur, interface
-from rodfem.scene import load
+from rodfem.la.schur import InterfaceSchur, interface
+from rodfem.app.scene import load
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BIN = os.path.dirname(sys.executable)
@@ -98,7 +98,7 @@ def test_partial_lu_leaves_the_schur_complement(method):
     backward sweep A_II^{-1} (b_I - A_IG x_G), each to round-off."""
     import scipy.sparse as sp
 
-    from rodfem.partial_lu import PartialLU
+    from rodfem.la.partial_lu import PartialLU
     rng = np.random.default_rng(1)
     nI, nG = 300, 6
     chain = sp.diags([rng.normal(size=nI - abs(k)) for k in range(-4, 5)], range(-4, 5)) + 10 * sp.eye(nI)
@@ -152,8 +152,8 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     from dolfinx import fem, mesh as dmesh
     from dolfinx.fem import petsc as fpetsc
 
-    from rodfem import compat
-    from rodfem.fastassembly import FastJacobian
+    from rodfem.fem import compat
+    from rodfem.fem.fastassembly import FastJacobian
     mesh = dmesh.create_interval(MPI.COMM_WORLD, 8, [0.0, 1.0])
     P1 = ufl.FiniteElement("P", mesh.ufl_cell(), 1)
     V = fem.FunctionSpace(mesh, ufl.MixedElement([P1] * 4))
@@ -184,9 +184,9 @@ def test_linear_time_collapse_is_dolfinx_collapse():
     DOLFINx's quadratic collapse does: the same dofs of W, the same interpolated values."""
     from dolfinx import fem, mesh as dmesh
 
-    from forms.cosserat_rod import CosseratRod
-    from forms.planar_beam import PlanarBeam, quadratic
-    from rodfem.spaces import StateSpace
+    from rodfem.forms.cosserat_rod import CosseratRod
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
+    from rodfem.core.spaces import StateSpace
     for model in (PlanarBeam(1.0, 1.0, quadratic(1.0, 1.0, 1.0), degree=2),
                   CosseratRod(1.0, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0])):
         S = StateSpace(dmesh.create_interval(MPI.COMM_WORLD, 17, [0.0, 2.0]), model.fields)

@@ -16,11 +16,11 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.interconnection import ConstraintError, Frame, Joint, Point, ground
+from rodfem.core.joints import ConstraintError, Frame, Joint, Point, ground
 
-from demos import _slider_crank_reference as exact
-from demos import slider_crank_3d
-from forms import joints
+from rodfem.demos import _slider_crank_reference as exact
+from rodfem.demos import slider_crank_3d
+from rodfem.forms import joints
 
 T_END = 1.0       # about 1.7 crank revolutions
 DT = 2e-3
@@ -164,7 +164,7 @@ def test_universal_joint_axes_must_start_perpendicular():
 def test_universal_joint_on_a_ground_frame():
     """A ground frame's axes are its R: universal(axis_a=(0, 1, 0)) about the world y-axis."""
     j = Joint(joints.universal(axis_a=(0.0, 1.0, 0.0), axis_b=2), ground((0, 0, 0)), Point(None, "body"), "g")
-    from rodfem.system import ground_frame
+    from rodfem.core.system import ground_frame
     g = ground_frame(ground((0, 0, 0)), 3)
     j.bind(lambda q: g, lambda q: Frame(x=q[:3], d=[q[3:6], q[6:9], q[9:12]]), np.zeros(0),
            np.concatenate([np.zeros(3), np.eye(3).ravel()]), 1.0)

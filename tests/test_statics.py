@@ -1,4 +1,4 @@
-"""Static equilibrium of the discrete model (rodfem/statics.py): only the spatial error is left.
+"""Static equilibrium of the discrete model (rodfem/analysis/statics.py): only the spatial error is left.
 
 roll-up and helix against their exact solutions with different numbers of load steps, the
 spatial order of the 3D rod, a multibody system, a static solution that starts a dynamic run
@@ -10,12 +10,12 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Load, Support, System, ramp, run
-from rodfem.cli import main
-from rodfem.scene import load
-from rodfem.statics import Statics, solve
+from rodfem.app.cli import main
+from rodfem.app.scene import load
+from rodfem.analysis.statics import Statics, solve
 
-from forms import joints
-from forms.planar_beam import PlanarBeam, quadratic, straight
+from rodfem.forms import joints
+from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 
 
 def static_error(name, n_elements, steps, adaptive=False, **overrides):

@@ -11,17 +11,17 @@ from mpi4py import MPI
 from ufl.algorithms import expand_derivatives
 
 from rodfem import Load, NewtonFailure, Problem, Support, run
-from rodfem.driver import run_scene
-from rodfem.scene import ParameterError
+from rodfem.app.driver import run_scene
+from rodfem.app.scene import ParameterError
 
-from forms.string import String
-from rodfem.integrators import Step
-from forms.string_materials import MATERIALS, biot, kirchhoff, logarithmic, tension_only
+from rodfem.forms.string import String
+from rodfem.core.integrators import Step
+from rodfem.forms.string_materials import MATERIALS, biot, kirchhoff, logarithmic, tension_only
 
 # the scenes by import (the CLI finds them through the entry points in pyproject.toml)
-from demos.crane_manoeuvre import scene as crane  # noqa: E402
-from demos.hanging_cable import scene as hanging  # noqa: E402
-from demos.taut_string_wave import scene as wave  # noqa: E402
+from rodfem.demos.crane_manoeuvre import scene as crane  # noqa: E402
+from rodfem.demos.hanging_cable import scene as hanging  # noqa: E402
+from rodfem.demos.taut_string_wave import scene as wave  # noqa: E402
 
 SCENES = {s.name: s for s in (hanging, crane, wave)}
 
@@ -240,7 +240,7 @@ def pulse_peak(pr):
 
 
 def test_wave_speed():
-    from demos.taut_string_wave import speeds
+    from rodfem.demos.taut_string_wave import speeds
     p = wave.values({})
     N, c_s, c = speeds(p)
     pr = wave.build(p, MPI.COMM_SELF)

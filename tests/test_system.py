@@ -1,4 +1,4 @@
-"""Multibody systems: bodies joined by joints (rodfem/system.py, forms/joints.py, forms/rigid_body.py).
+"""Multibody systems: bodies joined by joints (rodfem/core/system.py, forms/joints.py, forms/rigid_body.py).
 
 What can fail here: the four-bar against the authors' own reference value, the
 exact energy balance of the whole system, position constraints at round-off
@@ -11,14 +11,14 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Load, Support, run
-from rodfem.interconnection import ConstraintError, ground
-from rodfem.scene import load
-from rodfem.system import System
+from rodfem.core.joints import ConstraintError, ground
+from rodfem.app.scene import load
+from rodfem.core.system import System
 
-from forms import joints
-from forms.cosserat_rod import CosseratRod
-from forms.planar_beam import PlanarBeam, quadratic, straight
-from forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
+from rodfem.forms import joints
+from rodfem.forms.cosserat_rod import CosseratRod
+from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
+from rodfem.forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
 
 
 def four_bar(**overrides):

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from rodfem import Load, Problem, Support, run
-from rodfem.driver import run_scene
-from forms import cosserat_rod, planar_beam, string
-from forms.string_materials import kirchhoff, logarithmic
-from forms.viscoelastic import midpoint_factor, sls_creep, sls_relaxation
-from demos._rod3d import NEWTON, end_moment, straight
+from rodfem.app.driver import run_scene
+from rodfem.forms import cosserat_rod, planar_beam, string
+from rodfem.forms.string_materials import kirchhoff, logarithmic
+from rodfem.forms.viscoelastic import midpoint_factor, sls_creep, sls_relaxation
+from rodfem.demos._rod3d import NEWTON, end_moment, straight
 
 RULES = ("midpoint", "discrete-gradient")
 
@@ -442,8 +442,8 @@ def test_zero_branch_stiffness_is_the_elastic_model_bit_for_bit():
 def test_elastic_forms_unchanged_by_the_feature():
     """Without (active) branches a model builds the very forms it builds without the argument:
     the same UFL signatures, so the same compiled kernels.  (Built by Body, nothing compiled in
-    between: a compilation advances UFL's counters, see rodfem/problem.py: compile_forms.)"""
-    from rodfem.body import Body
+    between: a compilation advances UFL's counters, see rodfem/core/problem.py: compile_forms.)"""
+    from rodfem.core.body import Body
     init = {"r": lambda x: np.vstack([x[0], 0 * x[0]])}
     for rule in RULES:
         bodies = [Body(planar_beam.PlanarBeam(1.0, 0.1, planar_beam.quadratic(1.0, 2.0, 3.0), branches=br), 1.0, 2,
@@ -456,10 +456,10 @@ def test_elastic_forms_unchanged_by_the_feature():
 
 
 def test_system_of_bodies_sums_the_dissipation():
-    """A mechanism (rodfem/system.py): a viscoelastic beam pinned to an elastic one; the system's
+    """A mechanism (rodfem/core/system.py): a viscoelastic beam pinned to an elastic one; the system's
     balance includes the dissipating body's h d_n and stays exact."""
-    from rodfem.system import System
-    from forms import joints
+    from rodfem.core.system import System
+    from rodfem.forms import joints
     sys_ = System()
     visco = planar_beam.PlanarBeam(1.0, 0.1, planar_beam.quadratic(100.0, 100.0, 10.0), branches=planar_branches())
     elastic = planar_beam.PlanarBeam(1.0, 0.1, planar_beam.quadratic(100.0, 100.0, 10.0))

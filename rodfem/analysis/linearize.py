@@ -1,0 +1,586 @@
+"""The linearized port-Hamiltonian model about a state, as sparse matrices; natural modes.
+
+The discrete model of one step is E (x_{n+1} - x_n)/h = f(x_{n+1/2}, u); its
+time-continuous form E x' = f(x, u) is linearized about a state x* (the
+initial state or a static equilibrium, rodfem/analysis/statics.py) and inputs u*:
+
+    E dx' = A dx + B du,        dy = C dx,        f0 = f(x*, u*) (zero at an equilibrium)
+
+E = dF/d(x') and A = -dF/dx come from the model's own residual (a `RestStep`
+whose rates are a separate field), B = -dF/du from the loads' input maps, C
+from their outputs y = B(x)^T z.  The supported dofs (Dirichlet rows) are
+removed.  With the constraints kept (rod orthonormality, zero compliances,
+massless directors) E is singular: the model is a port-Hamiltonian DAE.
+
+Port-Hamiltonian form (descriptor form of Beattie, Mehrmann, Xu, Zwart 2018):
+
+    E dx' = (J - R) Q dx + B du,    dy = B^T Q dx,    H_lin = 1/2 dx^T E^T Q dx,
+    J = -J^T,  R = R^T >= 0,  E^T Q = Q^T E >= 0
+
+with z = Q dx the co-energy (effort) variables, found field by field:
+velocities, stresses of the compliance form and multipliers are their own
+efforts; a strain s has z = W''(s) s, i.e. Q_ss = M_s^{-1} Hess_ss (the
+strain's mass matrix and the Hessian of H); a field with E = 0
+(multipliers, constrained stresses, massless velocities) has Q = I.  The
+positions q (pairs q' = v of model.kinematics) are not in H; about a
+pre-stressed state (hanging cable, loaded beam) their columns of A are the
+geometric stiffness, which becomes the Q_qq that makes A = (J - R) Q
+(E^T Q restricted to q is that stiffness, symmetric for conservative loads;
+positive about unstressed states and states in tension, indefinite under a
+compressive or bending pre-stress; `checks` reports the residual
+|A - (J - R) Q|, the asymmetry of E^T Q and |R|).  An algebraic row (E = 0:
+a constraint) may be written with either sign; the rows of the models'
+constraints (+G w, the transpose of the reactions +G^T lambda) are negated
+in A and B so that J comes out skew (`checks['rows_negated']`).  `Hess` is
+the plain Hessian of H at x* (without the geometric stiffness).  The
+decomposition assumes x* at rest (an equilibrium, or the rest state of a
+scene); about a moving state (an initial spin) the rows that depend on the
+velocities are not of that form and `checks['ph_residual']` says how much.
+
+Modes: the nonzero eigenvalues of the pencil (A, E) are +-i omega.  The rate
+form also has one zero eigenvalue per strain (the compatibility invariants
+of the rate rows, e.g. C_N N - Pi Gamma(q)), which would swamp a
+shift-invert solver; so modes use the pencil (A_m, E_m) of the same model
+with the total-form rows of statics in place of the rate rows (strains
+algebraic: E_m = 0 on them; constraints on position level): the same
+nonzero spectrum without those zeros.  Solved with SLEPc (shift-invert
+about `target`, Krylov-Schur, SuperLU) or, for at most `DENSE_MAX` dofs or
+without slepc4py, with scipy's dense QZ (`solver='dense'`).
+
+Serial only (the exported matrices are assembled on one rank).  Systems: the bodies' blocks
+and the joints' rows (module `Linearization`); a joint's drive is not an input of the linear model.
+"""
+import numpy as np
+import scipy.sparse as sp
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+
+from rodfem.core.problem import compile_forms
+from rodfem.app.scene import ParameterError
+from rodfem.analysis.statics import RestStep, bodies_of, rest_form
+
+DENSE_MAX = 1500
+
+
+def _csr(A):
+    """A PETSc matrix as a scipy CSR matrix (serial)."""
+    indptr, indices, data = A.getValuesCSR()
+    return sp.csr_matrix((data, indices, indptr), shape=A.getSize())
+
+
+def _matrix(form):
+    A = fpetsc.assemble_matrix(form)
+    A.assemble()
+    M = _csr(A)
+    A.destroy()
+    return M
+
+
+def _vector(form):
+    b = fpetsc.assemble_vector(form)
+    b.ghostUpdate(addv=__import__("petsc4py").PETSc.InsertMode.ADD, mode=__import__("petsc4py").PETSc.ScatterMode.REVERSE)
+    out = b.getArray().copy()
+    b.destroy()
+    return out
+
+
+def _body_fields(body):
+    """(field name, component, s) of every dof of a body's space (its local numbering)."""
+    S = body.space
+    n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
+    field = np.empty(n, dtype=object)
+    comp = np.zeros(n, dtype=int)
+    coord = np.zeros(n)
+    for fld in S.fields:
+        if body.rigid:   # one cell: one dof per component (RigidSpace collapses nothing)
+            dofs = np.asarray(S._dofs(fld.name))
+            field[dofs], comp[dofs], coord[dofs] = fld.name, np.arange(len(dofs)), 0.5
+            continue
+        Vi, dofs = S.collapse(fld.name)
+        bs = Vi.dofmap.index_map_bs
+        xs = Vi.tabulate_dof_coordinates()[:, 0]
+        dofs = np.asarray(dofs)
+        ok = dofs < n
+        k = np.arange(len(dofs))
+        field[dofs[ok]] = fld.name
+        comp[dofs[ok]] = (k % bs)[ok]
+        coord[dofs[ok]] = xs[k // bs][ok]
+    return field, comp, coord
+
+
+class Linearization:
+    """The linear model of a Problem or a System about its current state x_n (inputs as they are
+    set now, e.g. by a static solve); `reference`: the state of the total-form rows (a Function,
+    or for a System a dict body name -> Function; default the initial state).
+
+    A System's state is its bodies' dofs in the order of the bodies, then the joints'
+    multipliers; the joints add their reactions G(q)^T lambda to the momentum rows and their
+    rows G(q) v (rate form; E = 0) or g(q) - g_p (the pencil of modes)."""
+
+    def __init__(self, problem, reference=None):
+        if problem.comm.size > 1:
+            raise ParameterError("linearize and modes run on one process (no mpirun)")
+        self.problem = problem
+        self.system = isinstance(getattr(problem, "bodies", None), dict)
+        if self.system:
+            problem.build()
+        bodies = bodies_of(problem)
+        parts = []
+        for name, body in bodies:
+            ref = reference.get(name) if isinstance(reference, dict) else reference
+            parts.append(self._body(name, body, ref if ref is not None else body.state0))
+        self.X = parts[0]["X"] if not self.system else None
+        sizes = [p["n"] for p in parts]
+        n_lam = problem.lam_space.dofmap.index_map.size_local * problem.lam_space.dofmap.index_map_bs \
+            if self.system and problem.lam_space is not None else 0
+        full = {}
+        for k in ("E", "A", "Em", "Am", "Hess"):
+            blocks = [p[k] for p in parts] + ([sp.csr_matrix((n_lam, n_lam))] if n_lam else [])
+            full[k] = sp.lil_matrix(sp.block_diag(blocks, format="csr"))
+        f0 = np.concatenate([p["f0"] for p in parts] + [np.zeros(n_lam)])
+        N = f0.size
+        Bcols = [np.concatenate([p["Bcols"][j] if i == b else np.zeros(sizes[i]) for i in range(len(parts))]
+                                + [np.zeros(n_lam)]) for b, p in enumerate(parts) for j in range(len(p["Bcols"]))]
+        Crows = [np.concatenate([p["Crows"][j] if i == b else np.zeros(sizes[i]) for i in range(len(parts))]
+                                + [np.zeros(n_lam)]) for b, p in enumerate(parts) for j in range(len(p["Crows"]))]
+        self.inputs = [(f"{p['name']}.{x}" if self.system else x) for p in parts for x in p["inputs"]]
+        if self.system and self.problem.joints:
+            self._joints(full, f0)
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        self.free = np.concatenate([offsets[i] + p["free"] for i, p in enumerate(parts)]
+                                   + [offsets[-1] + np.arange(n_lam)]).astype(int)
+        f = self.free
+        self.E, self.A, self.Em, self.Am, self.Hess = (sp.csr_matrix(full[k])[f][:, f].tocsr()
+                                                      for k in ("E", "A", "Em", "Am", "Hess"))
+        self.f0 = f0[f]
+        self.B = sp.csr_matrix(np.column_stack(Bcols)[f]) if Bcols else sp.csr_matrix((len(f), 0))
+        self.C = sp.csr_matrix(np.vstack(Crows)[:, f]) if Crows else sp.csr_matrix((0, len(f)))
+        states = []
+        for p in parts:
+            states += [((f"{p['name']}.{fl}" if self.system else fl), c, x, k) for fl, c, x, k in p["states"]]
+        states += [("joints.lambda", i, 0.0, "other") for i in range(n_lam)]
+        self.states = [states[i] for i in f] if len(states) == N else states
+        self.parts, self.offsets = parts, offsets
+        self.J, self.R, self.Q, self.checks = ph_form(self)
+
+    def _body(self, name, body, ref):
+        """The matrices of one body (its local numbering, all dofs) at its state x_n."""
+        S, model = body.space, body.model
+        X, Xdot = fem.Function(S.V), fem.Function(S.V)
+        X.x.array[:] = body.x0.x.array
+        F_rate = rest_form(body, X, ref, rates=Xdot, total=False)
+        F_tot = rest_form(body, X, ref, rates=Xdot, total=True)
+        H = model.hamiltonian(S.split(X), body.dx, body.ds)
+        step = RestStep(S.split(X))
+        test = S.split(ufl.TestFunction(S.V))
+        forms = {"E": ufl.derivative(F_rate, Xdot), "A": -ufl.derivative(F_rate, X),
+                 "Em": ufl.derivative(F_tot, Xdot), "Am": -ufl.derivative(F_tot, X),
+                 "Hess": ufl.derivative(ufl.derivative(H, X), X), "f0": -F_rate}
+        for k, load in enumerate(body.loads):
+            forms[f"B{k}"] = -load.input_map(step, test, body.dx, body.ds)
+            forms[f"C{k}"] = ufl.derivative(load.power(step, body.dx, body.ds), X)
+        c = compile_forms(forms)
+        out = {k: _matrix(c[k]) for k in ("E", "A", "Em", "Am", "Hess")}
+        out["f0"] = _vector(c["f0"])
+        out["Bcols"], out["Crows"], out["inputs"] = [], [], []
+        for k, load in enumerate(body.loads):
+            saved = np.array(load.constant.value, dtype=float, copy=True)
+            for j in range(saved.size):
+                e = np.zeros(saved.size)
+                e[j] = 1.0
+                load.constant.value = e.reshape(saved.shape)
+                out["Bcols"].append(_vector(c[f"B{k}"]))
+                out["Crows"].append(_vector(c[f"C{k}"]))
+                out["inputs"].append(f"{load.name}[{j}]" if saved.size > 1 else load.name)
+            load.constant.value = saved
+        n = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
+        fixed = np.unique(np.concatenate([bc.dof_indices()[0] for bc in body.bcs])) if body.bcs else np.zeros(0, int)
+        field, comp, coord = _body_fields(body)
+        kin = getattr(model, "kinematics", {})
+        kinds = {q: "position" for q in kin}
+        kinds.update({v: "velocity" for v in kin.values()})
+        out.update(name=name, body=body, X=X, n=n, free=np.setdiff1d(np.arange(n), fixed),
+                   states=[(field[i], int(comp[i]), float(coord[i]), kinds.get(field[i], "other")) for i in range(n)])
+        return out
+
+    def _joints(self, full, f0):
+        """The joints' rows and reactions at the System's state (serial: block indices = global)."""
+        A = self.problem.assembler
+        x = A.X0.getArray(readonly=True)
+        for j in self.problem.joints:
+            q, v, lam = x[j.q_index], x[j.v_index], x[j.lam_index]
+            G = np.einsum("kij,j->ki", j.Q, q) + j.c
+            g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e
+            fixed = A.fixed
+            rows = [k for k, i in enumerate(j.v_index) if int(i) not in fixed]
+            vi, qi, li = j.v_index, j.q_index, j.lam_index
+            lamQ = np.einsum("k,kij->ij", lam, j.Q)
+            for key in ("A", "Am"):
+                M = full[key]
+                for r in rows:
+                    for cq in range(len(qi)):
+                        M[vi[r], qi[cq]] -= lamQ[r, cq]
+                    for k in range(len(li)):
+                        M[vi[r], li[k]] -= G[k, r]
+            Qv = np.einsum("kij,j->ki", j.Q, v)
+            for k in range(len(li)):
+                for c_ in range(len(vi)):
+                    full["A"][li[k], vi[c_]] -= G[k, c_]        # rate rows: G(q) v
+                for c_ in range(len(qi)):
+                    full["A"][li[k], qi[c_]] -= Qv[k, c_]
+                    full["Am"][li[k], qi[c_]] -= G[k, c_]       # position rows: g(q) - g_p
+            for r in rows:
+                f0[vi[r]] -= G[:, r] @ lam
+            f0[li] -= G @ v
+            self.joint_gap = max(getattr(self, "joint_gap", 0.0), float(np.max(np.abs(g))) if len(g) else 0.0)
+
+    def groups(self):
+        """{(field, component): indices into the retained dofs}."""
+        out = {}
+        for i, (name, c, _, _) in enumerate(self.states):
+            out.setdefault((name, c), []).append(i)
+        return {k: np.array(v) for k, v in out.items()}
+
+    # -- export ----------------------------------------------------------------------
+    def matrices(self):
+        return {"E": self.E, "J": self.J, "R": self.R, "Q": self.Q, "B": self.B, "C": self.C,
+                "A": self.A, "Hess": self.Hess, "E_modes": self.Em, "A_modes": self.Am}
+
+    def write(self, out, extra=None):
+        """E.npz, J.npz, ... (scipy.sparse.save_npz), linear.mat (MATLAB, all matrices, f0 and the
+        state description), states.csv, linear.json."""
+        import json
+        import os
+
+        import scipy.io
+        os.makedirs(out, exist_ok=True)
+        mats = {k: sp.csr_matrix(M) for k, M in self.matrices().items()}
+        for M in mats.values():
+            M.eliminate_zeros()
+        for k, M in mats.items():
+            sp.save_npz(os.path.join(out, f"{k}.npz"), sp.csr_matrix(M))
+        np.save(os.path.join(out, "f0.npy"), self.f0)
+        with open(os.path.join(out, "states.csv"), "w") as fh:
+            fh.write("index,field,component,s,kind\n")
+            for i, (name, c, s, kind) in enumerate(self.states):
+                fh.write(f"{i},{name},{c},{s!r},{kind}\n")
+        scipy.io.savemat(os.path.join(out, "linear.mat"),
+                         {**{k: sp.csc_matrix(M) for k, M in mats.items()}, "f0": self.f0[:, None],
+                          "state_field": np.array([s[0] for s in self.states], dtype=object),
+                          "state_component": np.array([s[1] for s in self.states], dtype=float),
+                          "state_s": np.array([s[2] for s in self.states]),
+                          "inputs": np.array(self.inputs, dtype=object)})
+        info = {"n_states": len(self.states), "n_inputs": self.B.shape[1], "inputs": self.inputs,
+                "sizes": {k: list(M.shape) for k, M in mats.items()},
+                "nnz": {k: int(sp.csr_matrix(M).nnz) for k, M in mats.items()},
+                "rank_E": None, "drift_norm": float(np.linalg.norm(self.f0)), "checks": self.checks,
+                "fields": sorted({s[0] for s in self.states}), **(extra or {})}
+        with open(os.path.join(out, "linear.json"), "w") as fh:
+            json.dump(info, fh, indent=2, default=float)
+        return info
+
+
+def _norm(M):
+    M = sp.csr_matrix(M)
+    return float(np.sqrt(M.multiply(M).sum())) if M.nnz else 0.0
+
+
+def ph_form(lin):
+    """(J, R, Q, checks) with A = (J - R) Q on the retained dofs (see the module docstring)."""
+    from scipy.sparse.linalg import spsolve
+    E, A, Hess = lin.E.tocsc(), lin.A.tocsc(), lin.Hess.tocsc()
+    n = E.shape[0]
+    groups = lin.groups()
+    kinds = {name: kind for name, _, _, kind in lin.states}
+    Q = sp.lil_matrix((n, n))
+    Qinv = sp.lil_matrix((n, n))
+    efforts, positions, algebraic = [], [], []
+    for (name, _), g in groups.items():
+        if kinds[name] == "position":
+            positions.append(g)
+            continue
+        Eg, Hg = E[g][:, g], Hess[g][:, g]
+        if _norm(Eg) == 0.0:            # multipliers, constrained stresses, massless velocities: z = x
+            Qg, Qgi = sp.identity(len(g)), sp.identity(len(g))
+            if kinds[name] != "velocity":   # a massless velocity's row is a balance: its sign is fixed
+                algebraic.append((name, g))
+        else:
+            Qg = sp.csr_matrix(spsolve(Eg.tocsc(), Hg.tocsc()))
+            if _norm(Hg) == 0.0:
+                raise ParameterError(f"field {name} has E != 0 but no energy: cannot form Q")
+            Qgi = sp.csr_matrix(spsolve(Hg.tocsc(), Eg.tocsc()))
+        Q[np.ix_(g, g)] = Qg
+        Qinv[np.ix_(g, g)] = Qgi
+        efforts.append(g)
+    S = np.concatenate(efforts) if efforts else np.zeros(0, int)
+    P = np.concatenate(positions) if positions else np.zeros(0, int)
+    Qinv = Qinv.tocsc()
+    JR = sp.lil_matrix((n, n))
+    JR[:, S] = (A[:, S] @ Qinv[S][:, S]).tolil()
+    if len(P):
+        JR[:, P] = -(JR[P, :].T)                                  # skew completion: J_vq = -J_qv^T
+        JR = JR.tocsc()
+        JP = JR[:, P]
+        rows = np.unique(JP.nonzero()[0])
+        if len(rows) == len(P):
+            Q[np.ix_(P, P)] = sp.csr_matrix(spsolve(JP[rows].tocsc(), A[rows][:, P].tocsc()))
+    JR = sp.csr_matrix(JR)
+    # An algebraic row (E = 0) may be written with either sign (0 = G w or 0 = -G w): take the one
+    # that makes the interconnection skew (the rod's and rigid body's constraint rows are written
+    # +G w, the transpose of their reactions +G^T lambda); A, B and f0 are negated there too.
+    negated = []
+    for name, g in algebraic:
+        rows, cols = JR[g, :], JR[:, g].T
+        if _norm(rows - cols) < _norm(rows + cols):
+            D = sp.identity(n, format="lil")
+            D[g, g] = -1.0
+            D = D.tocsr()
+            JR = D @ JR
+            lin.A, lin.B, lin.E = (D @ lin.A).tocsr(), (D @ lin.B).tocsr(), (D @ lin.E).tocsr()
+            lin.f0 = D @ lin.f0
+            negated.append(name)
+    A = lin.A.tocsc()
+    Q = Q.tocsr()
+    J = 0.5 * (JR - JR.T)
+    R = -0.5 * (JR + JR.T)
+    EQ = (E.T @ Q).tocsr()
+    nA = _norm(A) or 1.0
+    nA_max = abs(A).max() or 1.0
+    checks = {"ph_residual": _norm(A - (J - R) @ Q) / nA,
+              "EtQ_asymmetry": _norm(EQ - EQ.T) / (_norm(EQ) or 1.0),
+              "R_norm": _norm(R) / nA,
+              "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0),
+              "rows_negated": sorted(set(negated))}
+    J, R = (_clean(M, nA_max) for M in (J, R))
+    Q = _clean(Q, abs(Q).max() or 1.0)
+    return J, R, Q, checks
+
+
+def _clean(M, scale):
+    """M without the round-off entries (below 1e-15 of `scale`) left by the splitting."""
+    M = sp.csr_matrix(M, copy=True)
+    M.data[np.abs(M.data) < 1e-15 * scale] = 0.0
+    M.eliminate_zeros()
+    return M
+
+
+# -- natural modes ----------------------------------------------------------------------------
+
+def natural_modes(lin, k=6, solver="auto", target=0.0):
+    """The k lowest natural angular frequencies omega (rad/s: the imaginary parts of the eigenvalues
+    s = -zeta |s| + i omega, the damped frequencies of a dissipating model) and mode vectors
+    (complex, retained dofs) of the pencil (A_m, E_m).  Returns (omega, vectors, solver used);
+    `lin.damping` holds the damping ratios zeta = -Re s / |s| of the modes (0 without dissipation)."""
+    n = lin.Em.shape[0]
+    if solver == "auto":
+        solver = "dense" if n <= DENSE_MAX or not _have_slepc() else "slepc"
+    if solver == "dense":
+        import scipy.linalg
+        w, V = scipy.linalg.eig(lin.Am.toarray(), lin.Em.toarray())
+        ok = np.isfinite(w)
+        w, V = w[ok], V[:, ok]
+    elif solver == "slepc":
+        w, V = _slepc(lin.Am, lin.Em, k, target)
+    else:
+        raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
+    scale = max(np.max(np.abs(w.imag)), 1.0) if len(w) else 1.0
+    # oscillating and not growing (the rest: the infinite eigenvalues of the constraints, real ones)
+    keep = (w.imag > 1e-9 * scale) & (w.real <= 1e-6 * np.abs(w)) if len(w) else []
+    w, V = w[keep], V[:, keep]
+    order = np.argsort(w.imag)[:k]
+    w, V = w[order], V[:, order]
+    lin.damping = np.maximum(-w.real / np.abs(w), 0.0) if len(w) else np.zeros(0)
+    return w.imag, V, solver
+
+
+def _have_slepc():
+    try:
+        import slepc4py  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+def _petsc(M):
+    from petsc4py import PETSc
+    M = sp.csr_matrix(M)
+    A = PETSc.Mat().createAIJ(size=M.shape, csr=(M.indptr.astype(PETSc.IntType), M.indices.astype(PETSc.IntType),
+                                                   M.data), comm=PETSc.COMM_SELF)
+    A.assemble()
+    return A
+
+
+def _slepc(Am, Em, k, target):
+    import slepc4py
+    slepc4py.init()
+    from slepc4py import SLEPc
+    A, B = _petsc(Am), _petsc(Em)
+    eps = SLEPc.EPS().create(comm=MPI.COMM_SELF)
+    eps.setOperators(A, B)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP)
+    eps.setDimensions(nev=2 * k + 4)
+    eps.setTarget(target)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    ksp = st.getKSP()
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("lu")
+    pc.setFactorSolverType("superlu")
+    eps.setTolerances(1e-12, 500)
+    eps.solve()
+    vals, vecs = [], []
+    vr, vi = A.createVecs()
+    for i in range(eps.getConverged()):
+        lam = eps.getEigenpair(i, vr, vi)
+        vals.append(lam)
+        vecs.append(vr.getArray().copy() + 1j * vi.getArray().copy())
+    for obj in (eps, A, B, vr, vi):
+        obj.destroy()
+    return np.array(vals, dtype=complex), (np.column_stack(vecs) if vecs else np.zeros((Am.shape[0], 0), complex))
+
+
+def mode_shapes(lin, vectors):
+    """Per flexible body: (name, s, reference positions[n, d], [displacement[n, d] per mode]) of the
+    centreline, each mode normalised to max |dr| = 1 over all bodies (real: the phase of its
+    largest entry removed)."""
+    where = {int(d): i for i, d in enumerate(lin.free)}
+    bodies, raw = [], []
+    for k, part in enumerate(lin.parts):
+        body = part["body"]
+        if body.rigid:
+            continue
+        S, pos = body.space, body.model.position
+        Vi, dofs = S.collapse(pos)
+        bs = Vi.dofmap.index_map_bs
+        nloc = Vi.dofmap.index_map.size_local
+        s = Vi.tabulate_dof_coordinates()[:nloc, 0]
+        order = np.argsort(s)
+        dofs = np.asarray(dofs)
+        ref = part["X"].x.array[dofs].reshape(-1, bs)[:nloc][order]
+        rows = np.array([where.get(int(lin.offsets[k] + d), -1) for d in dofs])
+        disp = []
+        for m in range(vectors.shape[1]):
+            full = np.where(rows >= 0, vectors[np.maximum(rows, 0), m], 0.0)
+            disp.append(full.reshape(-1, bs)[:nloc][order])
+        bodies.append((part["name"], s[order], ref))
+        raw.append(disp)
+    shapes = []
+    for m in range(vectors.shape[1]):
+        allv = np.concatenate([r[m].ravel() for r in raw]) if raw else np.zeros(1)
+        big = allv[np.argmax(np.abs(allv))] if allv.size else 0
+        per = [(r[m] / big).real if big != 0 else r[m].real for r in raw]
+        scale = max((np.max(np.abs(x)) for x in per), default=1.0) or 1.0
+        shapes.append([x / scale for x in per])
+    return bodies, shapes
+
+
+def plot_modes(path, bodies, shapes, omega, amplitude=None):
+    """The first modes (one panel each): reference centrelines dashed, +- the mode shape."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    n = len(shapes)
+    refs = [b[2] for b in bodies]
+    every = np.concatenate(refs)
+    L = float(np.max(np.ptp(every, axis=0))) or 1.0
+    a = amplitude or 0.1 * L
+    d = every.shape[1]
+    spread = np.ptp(np.concatenate([every] + [r + a * x for mode in shapes for r, x in zip(refs, mode)]), axis=0)
+    ax2 = sorted(np.argsort(spread)[-2:]) if d > 2 else [0, 1]
+    fig, axes = plt.subplots(1, max(n, 1), figsize=(3.2 * max(n, 1), 3.4), squeeze=False)
+    for k in range(n):
+        ax = axes[0, k]
+        for b, (ref, x) in enumerate(zip(refs, shapes[k])):
+            ax.plot(ref[:, ax2[0]], ref[:, ax2[1]], "k--", lw=1)
+            for sign, style in ((1, "-"), (-1, ":")):
+                y = ref + sign * a * x
+                ax.plot(y[:, ax2[0]], y[:, ax2[1]], style, color=f"C{b}", lw=1.5)
+        ax.set_title(f"mode {k + 1}: {omega[k] / (2 * np.pi):.4g} Hz")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("xyz"[ax2[0]])
+        ax.set_ylabel("xyz"[ax2[1]])
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# -- a scene's linear model and modes (rodfem linearize / rodfem modes) -------------------------
+
+ABOUT = ("static", "initial")
+
+
+def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=1):
+    """Build `scene` and put it in the state to linearize about: its static equilibrium under the
+    inputs at time t ('static', the default) or its initial state with the inputs at t
+    ('initial'; not an equilibrium in general: then f0 != 0).  Returns (scene, p, Linearization)."""
+    from rodfem.app.scene import Scene, load
+    from rodfem.analysis.statics import Statics
+    comm = comm or MPI.COMM_WORLD
+    if about not in ABOUT:
+        raise ParameterError(f"--about must be one of {', '.join(ABOUT)} (got {about!r})")
+    if comm.size > 1:
+        raise ParameterError("linearize and modes run on one process (no mpirun)")
+    if not isinstance(scene, Scene):
+        scene = load(scene)
+    p = scene.values(overrides)
+    problem = scene.build(p, comm)
+    system = isinstance(getattr(problem, "bodies", None), dict)
+    ref = None
+    if about == "static":
+        statics = Statics(problem)
+        statics.solve(t, load_steps)
+        ref = statics.refs if system else statics.refs[""]
+    else:
+        for load in problem.loads:
+            load.update(t)
+    return scene, p, Linearization(problem, reference=ref)
+
+
+def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
+    """`rodfem linearize`: the matrices into `out`; returns the linear.json content."""
+    import time
+    t0 = time.perf_counter()
+    scene, p, lin = prepare(scene, overrides, about, t)
+    from rodfem import __version__
+    extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
+             "wall_time_s": time.perf_counter() - t0, "form": "E dx' = (J - R) Q dx + B du, dy = B^T Q dx "
+             "(= C dx); A = (J - R) Q; Hess: Hessian of H; E_modes, A_modes: the total-form pencil of modes"}
+    return lin.write(out, extra) if out else extra
+
+
+def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, solver="auto"):
+    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info)."""
+    import json
+    import os
+    import time
+    if count < 1:
+        raise ParameterError(f"--count must be an integer >= 1 (got {count})")
+    t0 = time.perf_counter()
+    scene, p, lin = prepare(scene, overrides, about, t)
+    omega, vectors, used = natural_modes(lin, count, solver)
+    info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
+            "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
+            "damping_ratio": [float(z) for z in lin.damping],
+            "parameters": p, "wall_time_s": time.perf_counter() - t0}
+    if out:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "modes.csv"), "w") as fh:
+            fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio\n")
+            for k, w in enumerate(omega):
+                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r},{lin.damping[k]!r}\n")
+        with open(os.path.join(out, "modes.json"), "w") as fh:
+            json.dump(info, fh, indent=2, default=float)
+        if len(omega):
+            bodies, shapes = mode_shapes(lin, vectors)
+            plot_modes(os.path.join(out, "modes.png"), bodies, shapes[: min(len(shapes), 4)], omega)
+            arrays = {"omega": omega, "damping_ratio": lin.damping}
+            for b, (name, s, ref) in enumerate(bodies):
+                key = name or "body"
+                arrays[f"{key}.s"], arrays[f"{key}.reference"] = s, ref
+                arrays[f"{key}.shapes"] = np.array([mode[b] for mode in shapes])
+            np.savez(os.path.join(out, "mode_shapes.npz"), **arrays)
+    return omega, info

@@ -1,0 +1,223 @@
+"""Command line: ``rodfem list | show SCENE | run SCENE [--set NAME=VALUE ...] --out DIR``.
+
+Every way a run can end is one line on stderr and an exit code
+(rodfem.errors): bad input or environment ``rodfem: error: ...`` naming the
+parameter or path and what is allowed (2); a Newton failure with step, time
+and residual (3), keeping what was written; SIGINT/SIGTERM finish the
+current step, write the results and exit with 130/143
+(rodfem.common.interrupts).  Under MPI only rank 0 prints, and the ranks agree on
+an error before raising it; anything unforeseen aborts every rank
+(MPI_Abort) rather than leave one waiting.
+"""
+import argparse
+import os
+import sys
+import traceback
+
+from mpi4py import MPI
+
+from rodfem.common import interrupts
+from rodfem.errors import InputError, Interrupted
+from rodfem.nls.newton import NewtonFailure
+from rodfem.app.scene import ParameterError, load, scenes
+
+comm = MPI.COMM_WORLD
+
+
+def say(*args, file=None):
+    """Print on rank 0.  A standard output that cannot be written (``> /dev/full``) is an InputError."""
+    if comm.rank != 0:
+        return
+    stream = file or sys.stdout
+    try:
+        print(*args, file=stream, flush=True)
+    except OSError as e:
+        silence(stream)
+        if stream is sys.stdout:
+            raise InputError(f"cannot write to standard output ({e.strerror})") from None
+
+
+def silence(stream):
+    """Point a stream that failed at /dev/null, so that its unwritten rest does not fail again at exit."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, stream.fileno())
+    os.close(null)
+
+
+def parse_sets(pairs):
+    overrides = {}
+    for pair in pairs or []:
+        if "=" not in pair:
+            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")
+        name, value = pair.split("=", 1)
+        overrides[name.strip()] = value.strip()
+    return overrides
+
+
+def cmd_list(args):
+    for name, ep in scenes().items():
+        say(f"{name:24s} {ep.load().description}")
+
+
+def cmd_show(args):
+    scene = load(args.scene)
+    say(f"{scene.name}: {scene.description}")
+    if scene.notes:
+        say(scene.notes)
+    say(f"\n{'parameter':14s} {'default':>12s}  {'unit':8s} allowed / meaning")
+    for p in scene.parameters:
+        say(f"{p.name:14s} {str(p.default):>12s}  {p.unit:8s} {p.allowed()}: {p.doc}")
+
+
+def cmd_run(args):
+    from rodfem.app.driver import default_out, run_scene
+    if args.scene is None and not args.resume:
+        raise ParameterError("run needs a SCENE (or --resume DIR)")
+    out = args.out = args.out or args.resume or default_out(args.scene)
+    result, summary = run_scene(args.scene, parse_sets(args.set), out=out, progress=not args.quiet,
+                                resume=args.resume)
+    balance = "H_n+1 - H_n + h d_n - h y.u" if result.rows and "dissipated" in result.rows[0] else "H_n+1 - H_n - h y.u"
+    say(f"{summary['scene']}: {summary['steps']} steps in {summary['wall_time_s']:.2f} s "
+        f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
+        f"max |{balance}| = {summary['max_balance_error']:.2e} "
+        f"({summary['max_balance_error_relative']:.1e} of max |H|)")
+    say(f"results in {out}/: history.csv, summary.json, centreline.pvd and surface.pvd (ParaView), "
+        f"fields.json, animation.gif, shapes.png, energy.png")
+
+
+def cmd_study(args):
+    from rodfem.analysis.study import run_study
+    run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
+
+
+def cmd_static(args):
+    """rodfem static SCENE: the equilibrium of the discrete model under the loads at t (default t_end)."""
+    from rodfem.analysis.statics import run_static
+    out = args.out or os.path.join("results", args.scene + "-static")
+    _, result, summary = run_static(args.scene, parse_sets(args.set), out=out, t=args.time,
+                                    steps=args.load_steps, adaptive=not args.fixed_steps)
+    err = (f", error {summary['error_relative']:.3e} of the scale against the exact solution"
+           if summary.get("error_relative") is not None else "")
+    say(f"{summary['scene']}: static equilibrium at t = {summary['t']:g} in {summary['load_steps']} load steps "
+        f"({summary['load_steps_halved']} halved), {summary['newton_its']} Newton iterations, "
+        f"{summary['wall_time_s']:.2f} s{err}")
+    say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png, checkpoint.npz "
+        f"(a dynamic run from this equilibrium: rodfem run --resume {out} --out NEWDIR)")
+
+
+def cmd_linearize(args):
+    """rodfem linearize SCENE --out DIR: E, J, R, Q, B, C (.npz, .mat) about an equilibrium or the initial state."""
+    from rodfem.analysis.linearize import run_linearize
+    out = args.out or os.path.join("results", args.scene + "-linear")
+    info = run_linearize(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time)
+    c = info["checks"]
+    say(f"{info['scene']}: linear model about the {args.about} state at t = {args.time:g}: "
+        f"{info['n_states']} states, {info['n_inputs']} inputs; |A - (J - R) Q| = {c['ph_residual']:.1e} |A|, "
+        f"|f0| = {info['drift_norm']:.1e}")
+    say(f"results in {out}/: E.npz J.npz R.npz Q.npz B.npz C.npz A.npz Hess.npz (scipy.sparse.load_npz), "
+        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json")
+
+
+def cmd_modes(args):
+    """rodfem modes SCENE: natural frequencies and mode shapes of the linearized model."""
+    from rodfem.analysis.linearize import run_modes
+    out = args.out or os.path.join("results", args.scene + "-modes")
+    omega, info = run_modes(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time,
+                            count=args.count, solver=args.solver)
+    say(f"{info['scene']}: {len(omega)} modes about the {args.about} state ({info['solver']} eigensolver, "
+        f"{info['n_states']} states)")
+    say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s} {'damping':>10s}")
+    for k, w in enumerate(omega):
+        say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g} {info['damping_ratio'][k]:10.3g}")
+    say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz")
+
+
+def parser():
+    ap = argparse.ArgumentParser(prog="rodfem", description="Port-Hamiltonian rods, beams and strings in FEniCSx.")
+    sub = ap.add_subparsers(dest="command", required=True)
+    sub.add_parser("list", help="list the scenes").set_defaults(func=cmd_list)
+    sp = sub.add_parser("show", help="parameters of a scene")
+    sp.add_argument("scene")
+    sp.set_defaults(func=cmd_show)
+    rp = sub.add_parser("run", help="run a scene")
+    rp.add_argument("scene", nargs="?")
+    rp.add_argument("--resume", metavar="DIR", help="continue the run in DIR from its checkpoint "
+                    "(written with --set checkpoint_every=N)")
+    rp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    rp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE)")
+    rp.add_argument("--quiet", action="store_true", help="no progress bar")
+    rp.set_defaults(func=cmd_run)
+    st = sub.add_parser("study", help="error against run time over a sweep of dt and n_elements")
+    st.add_argument("scene")
+    st.add_argument("--set", action="append", metavar="NAME=VALUE")
+    st.add_argument("--out", metavar="DIR")
+    st.add_argument("--dt", type=float, nargs="+", help="time steps of the sweep")
+    st.add_argument("--elements", type=int, nargs="+", help="element counts of the sweep")
+    st.set_defaults(func=cmd_study)
+    add_static_parsers(sub)
+    return ap
+
+
+def add_static_parsers(sub):
+    """Subcommands of statics, linearization and modes (issue 12)."""
+    sp = sub.add_parser("static", help="static equilibrium of a scene (Newton with load continuation)")
+    sp.add_argument("scene")
+    sp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    sp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE-static)")
+    sp.add_argument("--time", type=float, metavar="T", help="the loads at time T (default t_end: the full load)")
+    sp.add_argument("--load-steps", type=int, default=1, metavar="N", help="first load step 1/N (default 1)")
+    sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
+    sp.set_defaults(func=cmd_static)
+    for name, func, what in (("linearize", cmd_linearize, "linear PH model E, J, R, Q, B, C of a scene (.npz, .mat)"),
+                             ("modes", cmd_modes, "natural frequencies and mode shapes of a scene")):
+        lp = sub.add_parser(name, help=what)
+        lp.add_argument("scene")
+        lp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+        lp.add_argument("--out", metavar="DIR", help=f"output directory (default results/SCENE-{'linear' if name == 'linearize' else 'modes'})")
+        lp.add_argument("--about", default="static", choices=("static", "initial"),
+                        help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
+        lp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
+        if name == "modes":
+            lp.add_argument("--count", type=int, default=6, metavar="K", help="number of modes (default 6)")
+            lp.add_argument("--solver", default="auto", choices=("auto", "slepc", "dense"),
+                            help="SLEPc shift-invert, or scipy's dense QZ (auto: dense up to 1500 states)")
+        lp.set_defaults(func=func)
+
+
+def main(argv=None):
+    import signal
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `rodfem list | head`: end quietly, not via PETSc's handler
+    args = parser().parse_args(argv)
+    import logging
+    logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
+    try:
+        with interrupts.deferred():
+            args.func(args)
+    except InputError as e:
+        return fail(f"rodfem: error: {e}", e.exit_code)
+    except NewtonFailure as e:
+        return fail(f"rodfem: error: {e}{kept(args)}", 3)
+    except Interrupted as e:
+        return fail(f"rodfem: {e}{kept(args)}", e.exit_code)
+    except Exception:
+        if comm.size > 1:  # a bug: abort every rank rather than leave the others waiting
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
+        raise
+    return 0
+
+
+def kept(args):
+    out = getattr(args, "out", None)
+    return f"; results so far kept in {out}/" if out and args.command == "run" else ""
+
+
+def fail(message, code):
+    """Report on one line (rank 0) and return the exit code."""
+    say(" ".join(message.split()), file=sys.stderr)
+    return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,131 @@
+"""Run a scene end to end: parameters -> Problem -> time loop -> files on disk."""
+import os
+import time
+from contextlib import nullcontext, suppress
+
+from mpi4py import MPI
+
+from rodfem.common import interrupts
+from rodfem.errors import InputError, Interrupted
+from rodfem.nls.newton import NewtonFailure
+from rodfem.io.output import OutDir, RunWriter, summarize, write_json
+from rodfem.app.scene import ParameterError, Scene, load
+from rodfem.analysis.timeloop import Result, run, steps_for
+
+STOPS = (NewtonFailure, Interrupted, InputError)
+
+
+def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WORLD, resume=None):
+    """Run `scene` (a Scene or its name) with `overrides` (dict name -> value or text).
+
+    Writes history.csv, summary.json, centreline/ and PNGs into `out` (if given), a
+    directory the run owns (rodfem.io.output.OutDir).  Returns (result, summary).  A Newton
+    failure, an interrupt (`Interrupted`) or an output error keeps everything written so
+    far, records it in summary.json and re-raises.  ``checkpoint_every=N`` among the
+    overrides writes out/checkpoint.npz every N steps; `resume` (a directory) continues
+    the run there from its checkpoint (rodfem/io/checkpoint.py).
+    """
+    from rodfem.io import checkpoint
+    overrides, saved = dict(overrides or {}), None
+    if resume:
+        saved = checkpoint.read(resume)
+        checkpoint.check(saved[0], resume, None if scene is None else getattr(scene, "name", scene))
+        scene = scene or saved[0]["scene"]
+        overrides = {**checkpoint.resume_parameters(saved[0], resume, overrides), **overrides,
+                     "checkpoint_every": overrides.get("checkpoint_every", saved[0]["checkpoint_every"])}
+    every = checkpoint_every(overrides.pop("checkpoint_every", 0), out)
+    continues = bool(saved) and saved[0]["step"] > 0     # step 0: a static equilibrium, a new run from it
+    if continues and out and os.path.realpath(out) != os.path.realpath(resume):
+        raise ParameterError(f"--resume continues the run in {resume}: give no --out (or the same directory)")
+    if not isinstance(scene, Scene):
+        scene = load(scene)
+    p = scene.values(overrides)
+    try:
+        n_steps = steps_for(p["dt"], p["t_end"])
+    except ValueError as e:
+        raise ParameterError(f"parameter 'dt': {e}") from None
+    outdir = OutDir(out, comm) if out else None
+    started = {"scene": scene.name, "status": "running", "parameters": p, "mpi_ranks": comm.size,
+               "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    with outdir.claimed(started, clear=not continues) if outdir else nullcontext():
+        problem = build(scene, p, comm, outdir, started)
+        start = checkpoint.restore(problem, *saved) if saved else None
+        if start and not continues:
+            start = None
+        if start and start.step > n_steps:
+            raise ParameterError(f"parameter 't_end': {p['t_end']:g} is before the checkpoint's time {start.t:g}")
+        if start and outdir:
+            rows = checkpoint.truncate_history(outdir, start.step)
+            result = Result(rows=rows, steps=start.step)
+            writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t,
+                                           p.get("section", 0.0))
+        else:
+            result = Result(steps=start.step if start else 0)
+            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0))
+                      if outdir else None)
+        saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
+        try:
+            if not (start and start.step == n_steps):   # a checkpoint at t_end: nothing left to run
+                run(problem, p["dt"], p["t_end"], writer=writer, progress=progress, result=result, start=start,
+                    after_step=saver)
+        except STOPS as stop:
+            status, failure = stopped(stop)
+            if writer:
+                with suppress(InputError):  # after an output error, keep what can still be written
+                    writer.finish(summarize(scene.name, p, problem, result, status, failure), result)
+            raise
+        summary = summarize(scene.name, p, problem, result)
+        if writer:
+            writer.finish(summary, result)
+    return result, summary
+
+
+def checkpoint_every(value, out):
+    """The checkpoint interval N (0: none) from --set checkpoint_every=N."""
+    try:
+        every = int(value)
+        if every != float(value) or every < 0:
+            raise ValueError
+    except (TypeError, ValueError):
+        raise ParameterError(f"parameter 'checkpoint_every' must be an integer >= 0 (got {value!r})") from None
+    if every and not out:
+        raise ParameterError("parameter 'checkpoint_every' needs an output directory (--out)")
+    return every
+
+
+def build(scene, p, comm, outdir=None, started=None):
+    """scene.build(p, comm); when it fails, summary.json says why (status "error" or "interrupted").
+
+    A compilation killed by a Ctrl-C (the C compiler gets the signal too) counts as the interrupt.
+    """
+    try:
+        return scene.build(p, comm)
+    except Exception as error:
+        if interrupts.received():  # whatever the compiler's death looked like
+            stop = Interrupted(interrupts.received())
+        elif isinstance(error, STOPS):
+            stop = error
+        else:
+            raise
+        if outdir:
+            status, failure = stopped(stop)
+            with suppress(InputError):
+                outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                          dict(started, status=status, failure=failure))
+        if stop is error:
+            raise
+        raise stop from None
+
+
+def stopped(stop):
+    """(status, failure record) of summary.json for an exception that ended a run."""
+    if isinstance(stop, NewtonFailure):
+        return "newton-failure", {"step": stop.step, "t": stop.t, "residual": stop.residual,
+                                  "iterations": stop.iterations, "reason": stop.reason}
+    if isinstance(stop, Interrupted):
+        return "interrupted", {"signal": stop.signal, "step": stop.step, "t": stop.t}
+    return "error", {"message": str(stop)}
+
+
+def default_out(name):
+    return os.path.join("results", name)

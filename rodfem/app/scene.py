@@ -1,0 +1,145 @@
+"""Scenes: a named, parametrised set-up of a model (the demos register them).
+
+A scene lists its `Parameter`s (default, unit, allowed range) and a
+`build(p, comm)` that returns a `Problem`.  Every scene has the common
+parameters n_elements, dt, t_end, integrator, frames and section.  Scenes are found
+through the entry-point group ``rodfem.scenes`` (see pyproject.toml), so
+rodfem itself names no model.
+"""
+import math
+import numbers
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import Callable, Optional
+
+from rodfem.errors import InputError
+from rodfem.core.integrators import RULES
+
+
+class ParameterError(InputError):
+    """Bad user input; the message is one line naming the parameter and what is allowed (exit code 2)."""
+
+
+@dataclass
+class Parameter:
+    name: str
+    default: object
+    unit: str = ""
+    doc: str = ""
+    low: Optional[float] = None       # allowed range: low <(=) value <(=) high
+    high: Optional[float] = None
+    low_open: bool = False            # True: value > low, False: value >= low
+    choices: Optional[tuple] = None
+
+    @property
+    def kind(self):
+        return type(self.default)
+
+    def allowed(self):
+        if self.choices:
+            return "one of " + ", ".join(map(str, self.choices))
+        what = "an integer" if self.kind is int else "a number"
+        if self.low is not None and self.high is not None:
+            return f"{what} in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
+        if self.low is not None:
+            return f"{what} {'>' if self.low_open else '>='} {self.low:g}"
+        return what
+
+    def parse(self, text):
+        if self.choices:
+            if text not in self.choices:
+                raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {text!r})")
+            return text
+        try:
+            value = float(text)
+            if self.kind is int:
+                if value != int(value):
+                    raise ValueError
+                value = int(value)
+        except (TypeError, ValueError):
+            raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {text!r})") from None
+        self.check(value)
+        return value
+
+    def check(self, value):
+        if self.choices:
+            if value not in self.choices:
+                raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
+            return
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
+        bad = not math.isfinite(value) or (self.kind is int and value != int(value))
+        if self.low is not None:
+            bad |= value <= self.low if self.low_open else value < self.low
+        if self.high is not None:
+            bad |= value > self.high
+        if bad:
+            raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value:g})")
+
+
+def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
+    """The parameters every scene has."""
+    return [
+        Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
+        Parameter("dt", dt, "s", "time step h", low=0, low_open=True),
+        Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
+        Parameter("integrator", integrator, "", "time integrator", choices=RULES),
+        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
+                  "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
+                  "(height: half of it; 0: a 25th of the longest body)", low=0),
+    ]
+
+
+def stiffness(name, default, unit, doc):
+    return Parameter(name, default, unit, doc, low=0, low_open=True)
+
+
+def density(name, default, unit, doc):
+    return Parameter(name, default, unit, doc, low=0)
+
+
+@dataclass
+class Scene:
+    name: str
+    description: str
+    parameters: list
+    build: Callable                      # build(p: dict, comm) -> Problem
+    reference: Optional[Callable] = None  # reference(p) -> dict of exact values (for studies)
+    notes: str = ""
+    _index: dict = field(default=None, init=False, repr=False)
+
+    def parameter(self, name):
+        if self._index is None:
+            self._index = {p.name: p for p in self.parameters}
+        if name not in self._index:
+            raise ParameterError(f"unknown parameter '{name}' for scene {self.name}; "
+                                 f"allowed: {', '.join(self._index)}")
+        return self._index[name]
+
+    def values(self, overrides=None):
+        """Defaults updated by `overrides` (dict name -> text or value), all checked."""
+        p = {q.name: q.default for q in self.parameters}
+        for name, value in (overrides or {}).items():
+            q = self.parameter(name)
+            if isinstance(value, str):
+                p[name] = q.parse(value)
+            else:
+                q.check(value)
+                p[name] = int(value) if q.kind is int else value
+        return p
+
+
+def scenes():
+    """All registered scenes, by name."""
+    found = {}
+    for ep in entry_points(group="rodfem.scenes"):
+        found[ep.name] = ep
+    return dict(sorted(found.items()))
+
+
+def load(name):
+    table = scenes()
+    if name not in table:
+        raise ParameterError(f"unknown scene '{name}'; available: {', '.join(table)}")
+    return table[name].load()

@@ -1,0 +1,181 @@
+"""Joints: power-preserving interconnections of bodies through points, as index-2 constraints.
+
+A joint ties a point of body a to a point of body b (or to the ground) by a
+position-level constraint g(q_a, q_b) = 0, written in forms/joints.py as a
+plain function of the two points' `Frame`s.  With q the configuration
+coordinates of both points (positions, directors, angles), v their
+velocities (the flows paired with q) and lambda the joint's multipliers,
+the joint adds to the step residual (seed 001: index 2, velocity level)
+
+    momentum rows of a and b:   + G(q_m)^T lambda          (the reaction forces)
+    the joint's own rows:       G(q_m) v_m - (g_p(t_{n+1}) - g_p(t_n))/h = 0
+
+with G = dg/dq, q_m, v_m midpoint values and lambda at t_{n+1}.  g must be
+QUADRATIC in q (true for every joint of director-based bodies): then
+g(q_{n+1}) - g(q_n) = G(q_m)(q_{n+1} - q_n) = h G(q_m) v_m exactly (the
+kinematic rows give q_{n+1} - q_n = h v_m node by node), so the position
+constraint holds to round-off for all time; and tested with v_m the
+reactions do no work, lambda . G(q_m) v_m = 0: the joint adds no energy.
+A driven joint (prescribed motion g(q) = g_p(t)) is an input port: it
+supplies the work -lambda . (g_p(t_{n+1}) - g_p(t_n)) in a step.
+
+The engine never looks inside g: it finds the quadratic form
+g_k(q) = 1/2 q.Q_k q + c_k.q + e_k by polarization (exact for a quadratic g),
+and refuses a g that is not quadratic.
+"""
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from rodfem.app.scene import ParameterError
+
+
+@dataclass
+class Frame:
+    """A material point seen by a joint: position x, directors d (3D bodies), angle phi (planar bodies)."""
+    x: np.ndarray
+    d: Optional[Sequence[np.ndarray]] = None
+    phi: Optional[float] = None
+
+    @property
+    def kind(self):
+        """What the point carries, in words (for error messages)."""
+        if self.d is not None:
+            return "directors (3D)"
+        return "an angle (planar)" if self.phi is not None else "a position only"
+
+    @property
+    def R(self):
+        """[d1 d2 d3] (columns)."""
+        return np.column_stack(self.d)
+
+
+@dataclass(frozen=True)
+class Point:
+    """A point of a body: an end ('left', 'right'), the rigid body itself ('body'), or a node at
+    s (markers), with an `offset` in the body's frame (rigid bodies, rod ends)."""
+    body: object                 # the System's BodyRef (None: the ground)
+    where: str
+    offset: tuple = ()
+    s: Optional[float] = None     # a node at arc length s; for the ground: its directors, if given
+
+    def describe(self):
+        if self.body is None:
+            return f"ground{tuple(self.offset) if any(self.offset) else ''}"
+        tail = f" + {tuple(self.offset)}" if any(self.offset) else ""
+        return f"{self.body.name}.{self.where}{tail}"
+
+
+def ground(x=(), R=None):
+    """A fixed point of the world at position x (default the origin), with the world axes
+    (or the directors R = [d1 d2 d3]) and angle 0."""
+    return Point(None, "ground", tuple(np.asarray(x, dtype=float).ravel()),
+                 None if R is None else tuple(np.asarray(R, dtype=float).ravel()))
+
+
+GROUND = ground()   # the world frame at the origin
+
+
+class ConstraintError(ParameterError):
+    """A joint that cannot be built: bad input, one line naming the joint (the CLI exits with 2)."""
+
+
+def quadratic_form(g, n, scale=1.0):
+    """(Q[m, n, n], c[m, n], e[m]) with g(q) = 1/2 q.Q_k q + c_k.q + e_k, by polarization.
+
+    Exact for a quadratic g (each entry is a combination of values of g at
+    points 0, +-s e_i, s(e_i + e_j) with a step s = `scale`); raises
+    ConstraintError if g is not quadratic (checked at random points).
+    """
+    s = float(scale)
+    e = np.atleast_1d(np.asarray(g(np.zeros(n)), dtype=float))
+    I = np.eye(n) * s
+    gp = np.array([np.atleast_1d(g(I[i])) for i in range(n)])
+    gm = np.array([np.atleast_1d(g(-I[i])) for i in range(n)])
+    c = ((gp - gm) / (2 * s)).T
+    Q = np.zeros((len(e), n, n))
+    diag = (gp + gm - 2 * e) / s**2
+    for i in range(n):
+        Q[:, i, i] = diag[i]
+        for j in range(i + 1, n):
+            qij = (np.atleast_1d(g(I[i] + I[j])) - gp[i] - gp[j] + e) / s**2
+            Q[:, i, j] = Q[:, j, i] = qij
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        q = rng.standard_normal(n) * s
+        exact = np.atleast_1d(g(q))
+        model = 0.5 * np.einsum("i,kij,j->k", q, Q, q) + c @ q + e
+        if np.max(np.abs(exact - model)) > 1e-9 * max(1.0, np.max(np.abs(exact))):
+            raise ConstraintError("is not quadratic in the coordinates of its points "
+                                  "(use director-based bodies or a point without offset)")
+    return Q, c, e
+
+
+class Joint:
+    """g(frame_a, frame_b, a0, b0) = drive(t) between points a and b (a0, b0: their initial frames).
+
+    `coordinates` is set by the System: for each side, the frame builder
+    q -> Frame and the initial coordinates q(0).
+    """
+
+    def __init__(self, constraint: Callable, a: Point, b: Point, name: str = "", drive: Callable = None):
+        self.constraint, self.a, self.b, self.drive = constraint, a, b, drive
+        self.name = name or getattr(constraint, "__name__", "joint")
+
+    def bind(self, frame_a, frame_b, qa0, qb0, scale):
+        """Fix the quadratic form of g(q), q = (q_a, q_b), from the frame builders and q(0)."""
+        na, qa0, qb0 = len(qa0), np.asarray(qa0, float), np.asarray(qb0, float)
+        a0, b0 = frame_a(qa0), frame_b(qb0)
+
+        def g(q):
+            return np.asarray(self.constraint(frame_a(q[:na]), frame_b(q[na:]), a0, b0), dtype=float).ravel()
+        where = f"joint {self.name} ({self.a.describe()} - {self.b.describe()})"
+        if len(a0.x) != len(b0.x):
+            raise ConstraintError(f"{where} joins a {len(a0.x)}D point to a {len(b0.x)}D point")
+        try:
+            g(np.concatenate([qa0, qb0]))
+        except (TypeError, ValueError, IndexError) as err:
+            kinds = " and ".join(f.kind for f in (a0, b0))
+            raise ConstraintError(f"{where} does not fit points that have {kinds} ({err})") from None
+        try:
+            self.Q, self.c, self.e = quadratic_form(g, na + len(qb0), scale)
+        except ConstraintError as err:
+            raise ConstraintError(f"{where} {err}") from None
+        self.size = len(self.e)
+        q0 = np.concatenate([qa0, qb0])
+        self.q_initial = q0
+        gap = np.max(np.abs(self.position_residual(q0, 0.0))) if self.size else 0.0
+        if gap > 1e-9 * scale:
+            raise ConstraintError(f"{where} does not hold in the initial configuration "
+                                  f"(|g| = {gap:.3g}): place the points where the joint puts them")
+        if self.drive is not None:
+            d0 = np.atleast_1d(np.asarray(self.drive(0.0), float))
+            if d0.shape != (self.size,) or np.any(np.abs(d0) > 1e-12 * scale):
+                raise ConstraintError(f"{where}: drive(t) must give {self.size} values, zero at t = 0 (got {d0})")
+
+    def prescribed(self, t):
+        """g_p(t) (zero for an ordinary joint)."""
+        if self.drive is None:
+            return np.zeros(self.size)
+        return np.atleast_1d(np.asarray(self.drive(t), dtype=float))
+
+    def position_residual(self, q, t):
+        """g(q) - g_p(t)."""
+        return 0.5 * np.einsum("i,kij,j->k", q, self.Q, q) + self.c @ q + self.e - self.prescribed(t)
+
+    def step(self, q0, q1, v0, v1, lam, h, t0, t1):
+        """Residual rows and their derivatives for one step.
+
+        Returns (r_v, r_lam, dr_v/dq1, dr_v/dlam, dr_lam/dq1, dr_lam/dv1, work):
+        r_v = G(q_m)^T lam (added to the momentum rows), r_lam = G(q_m) v_m - dg_p/h,
+        work = -lam . (g_p(t1) - g_p(t0)) (nonzero only for a driven joint).
+        """
+        qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
+        G = np.einsum("kij,j->ki", self.Q, qm) + self.c
+        dgp = self.prescribed(t1) - self.prescribed(t0)
+        r_v = G.T @ lam
+        r_lam = G @ vm - dgp / h
+        drv_dq = 0.5 * np.einsum("k,kij->ij", lam, self.Q)
+        drl_dq = 0.5 * np.einsum("kij,j->ki", self.Q, vm)
+        return r_v, r_lam, drv_dq, G.T, drl_dq, 0.5 * G, -float(lam @ dgp)

@@ -1,0 +1,46 @@
+"""What rodfem asks of a model (the physics lives in forms/, never here).
+
+A model is any object with
+
+``fields``       list of `Field`: the state x = (x_1, ..., x_n)
+``supports``     dict kind -> field names fixed by that support, e.g.
+                 {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]};
+                 "r.1" fixes only component 1 of r
+``position``     name of the centreline field (for tips and pictures)
+``quadrature_degree``   int, used for every cell integral of the model
+``hamiltonian(x, dx, ds)``   the Hamiltonian H(x) as a UFL form (ds(1), ds(2): the
+                 ends s = 0, L, for lumped energies such as end masses)
+``residual(step, test, dx, ds)``
+                 the weak form of E (x_{n+1} - x_n)/h - J(x_{n+1/2}) z = 0
+                 (no loads: the port layer adds B u), built from
+                 `step.rate`, `step.mid` and `step.effort`
+``compatible_strains(x)``
+                 dict strain-field -> UFL expression of the configuration,
+                 used to start the strains consistent with the initial shape
+``momentum(x)``  dict column -> density of momentum maps (p_x, ..., L_z),
+                 written for unsupported bodies; may be empty
+``flows``        dict load-kind -> flow field, e.g. {"force": "v", "moment": "omega"}
+
+Optional, for a model with dissipation (E x' = (J - R) z + B u, R >= 0):
+
+``dissipation(step, dx, ds)``
+                 the energy h d_n >= 0 the step dissipates, as a UFL form (h = step.h),
+                 such that H(x_{n+1}) - H(x_n) = -h d_n + h y.u holds exactly for the
+                 step's residual (e.g. h int z.R z ds with z the residual's efforts of
+                 the dissipative rows); None (or no such method) when the model
+                 dissipates nothing: then nothing is built or assembled for it
+                 (forms/viscoelastic.py: generalized Maxwell branches)
+
+Optional, for what a run writes (rodfem/io/snapshot.py, rodfem/io/frames.py):
+
+``outputs(x)``   dict name -> UFL expression of the state x: the strains and stress resultants
+                 written beside the state (cell by cell, at the nodes and segment midpoints)
+``directors(q)`` numbers: q dict field -> nodal values (n, size); returns the section frame
+                 (n, 3, 3), columns d1 (axis), d2, d3 (the section); a planar model's plane is
+                 z = 0, d3 = e_z.  Without it a body has no section (a string: a round tube)
+``labels``       dict field or output name -> (description, component names)
+``massless``     True when the model has no inertia: its velocities (the values of
+                 ``kinematics``) are not written
+``box()``        a rigid body's edge lengths (a1, a2, a3) along (d1, d2, d3), for pictures
+"""
+from rodfem.core.spaces import Field  # noqa: F401

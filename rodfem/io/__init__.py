@@ -1,0 +1,1 @@
+"""What a run writes: history, summary, frames (VTK), sections, pictures and checkpoints."""

@@ -1,0 +1,425 @@
+"""Checkpoint and restart: a run continued from its last checkpoint repeats the uninterrupted one bit by bit.
+
+``rodfem run SCENE --set checkpoint_every=N --out DIR`` writes DIR/checkpoint.npz
+after every N-th step (written to a temporary file and renamed, so a kill at
+any moment leaves the previous checkpoint whole) and summary.json with status
+"running" and the step reached.  It
+holds everything the next step depends on:
+
+* the state x_n of every body (all fields) and the system's multipliers,
+* x_{n-1}, from which Newton starts (x_{n+1}^0 = 2 x_n - x_{n-1}),
+* the step n, t_n = n dt, H(x_n), the supplied work so far, the LU package
+  Newton has switched to (PETSc's LU -> SuperLU/MUMPS after a zero pivot),
+* the scene, its parameters, N and the rodfem version,
+
+stored independently of the partition (each dof by field, component and
+position s; DG dofs also by their cell's midpoint), so a checkpoint written
+by ``mpirun -n 2`` restarts on one process (to round-off: the sums of the
+assembly run in another order) and the reverse.  There is no random state.
+
+``rodfem run --resume DIR`` (or ``rodfem run SCENE --resume DIR``) rebuilds the
+scene with the stored parameters, loads the checkpoint and continues: the
+rows of history.csv after the checkpoint (and a partly written last row) are
+dropped, the following rows appended, so history.csv equals that of the
+uninterrupted run.  Only ``t_end`` (to run further) may be changed.
+
+Newton itself keeps state across steps when it reuses its Jacobian (the
+chord Newton of the 3D rod scenes, ``snes_lag_jacobian`` persisting): a run
+that writes checkpoints starts a fresh solver after each checkpoint, as the
+resumed run does, so both compute the same iterates (such a run differs
+from one without checkpoints at Newton's tolerance, not beyond).
+"""
+import csv
+import io
+import json
+import os
+import xml.etree.ElementTree as ET
+from types import SimpleNamespace
+
+import numpy as np
+from mpi4py import MPI
+
+from rodfem.nls.newton import LU_CHAIN, lu_name
+from rodfem.app.scene import ParameterError
+
+FORMAT = 1
+NAME = "checkpoint.npz"
+CHANGEABLE = ("t_end", "checkpoint_every")
+
+
+# -- partition-independent state --------------------------------------------------------------
+
+def _bodies(problem):
+    refs = getattr(problem, "bodies", None)
+    return [(n, r.body) for n, r in refs.items()] if isinstance(refs, dict) else [("", problem)]
+
+
+def _field_keys(body, name):
+    """(W-local dofs [nodes, bs], integer keys [nodes, 2], number of owned nodes) of a field:
+    key = (cell midpoint for DG fields else 0, s), both in units of 1e-9 L (exact integers)."""
+    S = body.space
+    Vi, dofs = S.collapse(name)
+    bs = Vi.dofmap.index_map_bs
+    dofs = np.asarray(dofs).reshape(-1, bs)
+    xs = Vi.tabulate_dof_coordinates()[:, 0]
+    mid = np.zeros(len(xs))
+    if S.field(name).family == "DG":
+        m = body.mesh
+        tdim = m.topology.dim
+        ncells = m.topology.index_map(tdim).size_local + m.topology.index_map(tdim).num_ghosts
+        x = m.geometry.x[:, 0]
+        for c in range(ncells):
+            nodes = Vi.dofmap.cell_dofs(c)
+            mid[nodes] = x[m.geometry.dofmap.links(c)].mean()
+    unit = body.length * 1e-9
+    keys = np.column_stack([np.rint(mid / unit), np.rint(xs / unit)]).astype(np.int64)
+    return dofs, keys, Vi.dofmap.index_map.size_local
+
+
+def _rigid_dofs(body, name):
+    return body.space._dofs(name)
+
+
+def _pack(problem, arrays, comm):
+    """{body/field: (keys, values)} of the owned dofs of `arrays` (body name -> W-local array),
+    gathered on rank 0 (None elsewhere)."""
+    out = {}
+    for bname, body in _bodies(problem):
+        arr = arrays[bname]
+        for f in body.space.fields:
+            if body.rigid:
+                dofs = _rigid_dofs(body, f.name)
+                keys, vals = np.zeros((1 if len(dofs) else 0, 2), np.int64), arr[dofs].reshape(1, -1) if len(dofs) else np.zeros((0, f.size))
+            else:
+                dofs, keys, nloc = _field_keys(body, f.name)
+                keys, vals = keys[:nloc], arr[dofs[:nloc]]
+            parts = comm.gather((keys, vals), root=0)
+            if comm.rank == 0:
+                k = np.concatenate([p[0] for p in parts])
+                v = np.concatenate([p[1] for p in parts])
+                order = np.lexsort((k[:, 1], k[:, 0]))
+                out[f"{bname}/{f.name}"] = (k[order], v[order])
+    return out if comm.rank == 0 else None
+
+
+def _unpack(problem, data, arrays):
+    """Fill `arrays` (body name -> W-local array, ghosts included) from the saved fields."""
+    for bname, body in _bodies(problem):
+        arr = arrays[bname]
+        for f in body.space.fields:
+            keys, vals = data[f"{bname}/{f.name}"]
+            if body.rigid:
+                dofs = _rigid_dofs(body, f.name)
+                if len(dofs):
+                    arr[dofs] = vals.reshape(-1)
+                continue
+            dofs, mykeys, _ = _field_keys(body, f.name)
+            index = {(int(a), int(b)): i for i, (a, b) in enumerate(keys)}
+            try:
+                rows = np.array([index[(int(a), int(b))] for a, b in mykeys], dtype=int)
+            except KeyError:
+                raise ParameterError(f"the checkpoint does not fit field {f.name} of body {bname or 'the scene'} "
+                                     "(another mesh?)") from None
+            arr[dofs] = vals[rows] if len(rows) else arr[dofs]
+
+
+class _Layout:
+    """The time loop's state vector of a Problem (x0.x.array) or a System (the block X0 array)
+    as per-body W-local arrays and the multipliers, and back."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.system = isinstance(getattr(problem, "bodies", None), dict)
+        if self.system:
+            problem.build()
+
+    def current(self):
+        if not self.system:
+            return self.problem.x0.x.array
+        return self.problem.assembler.X0.getArray(readonly=True)
+
+    def split(self, vec):
+        """(body arrays, multipliers owned here) of a state vector `vec` in the loop's layout."""
+        if not self.system:
+            return {"": np.asarray(vec)}, np.zeros(0)
+        A = self.problem.assembler
+        out = {}
+        for i, (bname, body) in enumerate(_bodies(self.problem)):
+            full = np.zeros_like(body.x0.x.array)
+            full[: A.sizes[i]] = vec[A.offsets[i]:A.offsets[i + 1]]
+            out[bname] = full
+        lam = np.asarray(vec[A.offsets[len(A.bodies)]:]) if self.problem.lam_space is not None else np.zeros(0)
+        return out, lam
+
+    def join(self, arrays, lam):
+        """A state vector in the loop's layout (ghosts updated for a Problem)."""
+        if not self.system:
+            from dolfinx import fem
+            u = fem.Function(self.problem.space.V)
+            u.x.array[:] = arrays[""]
+            u.x.scatter_forward()
+            return u.x.array.copy()
+        A = self.problem.assembler
+        vec = np.zeros(A.offsets[-1])
+        for i, (bname, body) in enumerate(_bodies(self.problem)):
+            vec[A.offsets[i]:A.offsets[i + 1]] = arrays[bname][: A.sizes[i]]
+        if len(lam):
+            vec[A.offsets[len(A.bodies)]:] = lam
+        return vec
+
+
+def _gather_lam(comm, lam):
+    parts = comm.gather(np.asarray(lam), root=0)
+    return np.concatenate(parts) if comm.rank == 0 else None
+
+
+# -- writing -------------------------------------------------------------------------------------
+
+class Saver:
+    """`after_step` of the time loop: the checkpoint after every `every`-th step (only there: a
+    resumed run restarts Newton where the uninterrupted one did)."""
+
+    def __init__(self, outdir, scene_name, params, problem, every, n_steps):
+        self.outdir, self.out = outdir, outdir.path
+        self.scene, self.params, self.problem = scene_name, params, problem
+        self.every, self.n_steps = int(every), n_steps
+        self.layout = _Layout(problem)
+        self.comm = problem.comm
+        if self.comm.size > 1:
+            deterministic_solver(problem)
+
+    def __call__(self, n, previous, H, supplied, dissipated=0.0):
+        if n % self.every:
+            return
+        save(self.outdir, self.problem, self.layout, n, previous, H, supplied,
+             {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every},
+             dissipated=dissipated)
+        fresh_newton(self.problem)
+        if n != self.n_steps:   # how far it got, if it is killed now
+            from rodfem.io.output import write_json
+            status = {"scene": self.scene, "status": "running", "steps": n, "t": n * float(self.problem.h.value),
+                      "n_steps": self.n_steps, "checkpoint": {"step": n, "file": NAME},
+                      "resume": f"rodfem run --resume {self.out}", "parameters": self.params,
+                      "mpi_ranks": self.comm.size, "pid": os.getpid()}
+            self.outdir.do("write summary.json", write_json, self.outdir.file("summary.json"), status)
+
+
+def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
+    """Write the checkpoint of step n into `out` (an OutDir or a directory path; collective)."""
+    from rodfem import __version__
+    comm = problem.comm
+    dt = float(problem.h.value)
+    arrays, lam = layout.split(layout.current())
+    data = {"x": _pack(problem, arrays, comm), "x_lam": _gather_lam(comm, lam)}
+    if previous is not None:
+        parrays, plam = layout.split(previous)
+        data["previous"] = _pack(problem, parrays, comm)
+        data["previous_lam"] = _gather_lam(comm, plam)
+    info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=n * dt, dt=dt, H=H, supplied=supplied,
+                dissipated=dissipated,
+                has_previous=previous is not None, mpi_ranks=comm.size,
+                linear_solver=lu_name(problem.newton.settings))
+    if hasattr(out, "do"):
+        out.do("write the checkpoint", _write, out.path, info, data)
+    elif comm.rank == 0:
+        _write(out, info, data)
+
+
+def _write(out, info, data):
+    flat = {"meta": np.frombuffer(json.dumps(info, default=float).encode(), dtype=np.uint8)}
+    for which in ("x", "previous"):
+        if which in data:
+            for key, (k, v) in data[which].items():
+                flat[f"{which}:{key}:keys"], flat[f"{which}:{key}:values"] = k, v
+            flat[f"{which}:lam"] = data[which + "_lam"]
+    path = os.path.join(out, NAME)
+    tmp = path + f".tmp{os.getpid()}"
+    with open(tmp, "wb") as f:
+        np.savez(f, **flat)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def deterministic_solver(problem):
+    """Under MPI, factor with SuperLU on every rank (PCREDUNDANT) instead of MUMPS, unless the user
+    chose the preconditioner (-rodfem_pc_type): MUMPS's parallel factorization is not bitwise
+    reproducible from run to run (its dynamic scheduling; measured: 1 of 4 identical
+    `mpirun -n 2` four-bar runs differed in the last bit at step 3), so a resumed run could not
+    repeat the uninterrupted one.  Each rank then factors the whole matrix: cheap at rod sizes."""
+    from petsc4py import PETSc
+    nw = problem.newton
+    opts = PETSc.Options()
+    if opts.hasName(nw.prefix + "pc_type"):
+        return
+    nw.settings["pc_type"] = "redundant"
+    # the inner solver reads its options when it is set up (at the first solve): they stay
+    for key, value in (("redundant_pc_type", "lu"), ("redundant_pc_factor_mat_solver_type", "superlu")):
+        if not opts.hasName(nw.prefix + key):
+            opts[nw.prefix + key] = value
+    fresh_newton(problem)
+
+
+def fresh_newton(problem):
+    """A new SNES (same settings, same matrix and vectors), as a resumed run has: the chord
+    Newton's lagged Jacobian then restarts at the same step in both runs."""
+    from petsc4py import PETSc
+    nw = problem.newton
+    snes = PETSc.SNES().create(nw.snes.comm)
+    snes.setOptionsPrefix(nw.prefix)
+    snes.setFunction(nw._residual, nw.b)
+    snes.setJacobian(nw._jacobian, nw.A)
+    nw.snes.destroy()
+    nw.snes = snes
+    nw._configure(nw.settings)
+
+
+# -- reading ---------------------------------------------------------------------------------------
+
+def read(directory):
+    """(meta, arrays) of DIR/checkpoint.npz; ParameterError for a missing or unreadable one."""
+    path = os.path.join(directory, NAME)
+    if not os.path.isfile(path):
+        raise ParameterError(f"{directory} has no checkpoint ({NAME}): start the run with "
+                             "--set checkpoint_every=N to write one")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        meta = json.loads(arrays.pop("meta").tobytes().decode())
+    except Exception as e:  # noqa: BLE001  (a damaged file: one line, whatever numpy raised)
+        raise ParameterError(f"the checkpoint {path} is unreadable ({type(e).__name__}): "
+                             "resume from another directory or start again") from None
+    return meta, arrays
+
+
+def check(meta, directory, scene_name=None):
+    """Refuse a checkpoint of another format, rodfem version or scene (one line)."""
+    from rodfem import __version__
+    if meta.get("format") != FORMAT or meta.get("rodfem_version") != __version__:
+        raise ParameterError(f"the checkpoint in {directory} was written by rodfem "
+                             f"{meta.get('rodfem_version', '?')} (format {meta.get('format', '?')}); this is "
+                             f"rodfem {__version__}: it cannot continue it, start the run again")
+    if scene_name is not None and meta.get("scene") != scene_name:
+        raise ParameterError(f"the checkpoint in {directory} is of scene {meta.get('scene')}, not {scene_name}")
+
+
+def _fields(arrays, which):
+    out = {}
+    for k in arrays:
+        parts = k.split(":")
+        if parts[0] == which and len(parts) == 3 and parts[2] == "keys":
+            out[parts[1]] = (arrays[k], arrays[f"{which}:{parts[1]}:values"])
+    return out
+
+
+def restore(problem, meta, arrays):
+    """Put the checkpoint's x_n into the problem; returns the loop's start (step, H, supplied, previous)."""
+    layout = _Layout(problem)
+    comm = problem.comm
+
+    def vector(which):
+        bodies, lam = layout.split(layout.current())
+        _unpack(problem, _fields(arrays, which), bodies)
+        lam_all = arrays.get(f"{which}:lam", np.zeros(0))
+        if layout.system and problem.lam_space is not None:
+            A = problem.assembler
+            n_own = A.sizes[len(A.bodies)]
+            start = problem.lam_space.dofmap.index_map.local_range[0] * problem.lam_space.dofmap.index_map_bs
+            lam = np.asarray(lam_all[start:start + n_own], dtype=float)
+        return layout.join(bodies, lam)
+
+    x = vector("x")
+    previous = vector("previous") if meta.get("has_previous") else None
+    if layout.system:
+        A = problem.assembler
+        A.X0.getArray()[:] = x
+        A.X0.copy(A.X1)
+        A.push(A.X0, "x0")
+        A.push(A.X1, "x1")
+    else:
+        problem.x0.x.array[:] = x
+        problem.x1.x.array[:] = x
+    solver = meta.get("linear_solver")    # a switch after a zero pivot (same number of ranks only)
+    if solver in LU_CHAIN and meta.get("mpi_ranks") == comm.size and solver != lu_name(problem.newton.settings):
+        problem.newton.use_lu(solver)
+        fresh_newton(problem)
+    comm.Barrier()
+    problem.t = float(meta["t"])
+    return SimpleNamespace(step=int(meta["step"]), H=float(meta["H"]), supplied=float(meta["supplied"]),
+                           dissipated=float(meta.get("dissipated", 0.0)), previous=previous, t=float(meta["t"]))
+
+
+def resume_parameters(meta, directory, overrides):
+    """The checkpoint's parameters with the allowed changes (t_end, checkpoint_every)."""
+    bad = sorted(set(overrides or {}) - set(CHANGEABLE))
+    if bad:
+        raise ParameterError(f"--resume continues with the checkpoint's parameters: only {', '.join(CHANGEABLE)} "
+                             f"may be set (got {', '.join(bad)})")
+    return dict(meta["parameters"])
+
+
+# -- the output directory of a resumed run ------------------------------------------------------------
+
+def truncate_history(outdir, step):
+    """Keep the header and the rows of steps 0..step of history.csv in the OutDir (collective);
+    returns them (dicts) on rank 0, [] elsewhere."""
+    rows, error = [], None
+    if outdir.comm.rank == 0:
+        try:
+            rows = _truncate(outdir.path, step)
+        except ParameterError as e:
+            error = str(e)
+    error = outdir.comm.bcast(error, root=0)
+    if error:
+        raise ParameterError(error)
+    return rows
+
+
+def _truncate(out, step):
+    path = os.path.join(out, "history.csv")
+    if not os.path.isfile(path):
+        raise ParameterError(f"{out} has a checkpoint but no history.csv: cannot continue it")
+    with open(path, newline="") as f:
+        text = f.read()
+    lines = text.splitlines(keepends=True)
+    keep = lines[: step + 2]
+    if len(keep) < step + 2 or not keep[-1].endswith("\n"):
+        raise ParameterError(f"{path} has fewer rows than the checkpoint's step {step}: cannot continue it")
+    tmp = path + f".tmp{os.getpid()}"
+    with open(tmp, "w", newline="") as f:
+        f.write("".join(keep))
+    os.replace(tmp, path)
+    rows = list(csv.DictReader(io.StringIO("".join(keep))))
+    return [{k: (int(float(v)) if k == "newton_its" else float(v)) for k, v in r.items()} for r in rows]
+
+
+def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
+    """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint
+    (shapes.png and the animation then show the frames written after the restart)."""
+    from rodfem.io.output import RunWriter
+
+    class ResumedWriter(RunWriter):
+        def __init__(self):
+            super().__init__(outdir, problem, n_steps, frames, section)
+            self.count = step + 1
+            if problem.comm.rank != 0:
+                return
+            path = outdir.file("history.csv")
+            with open(path, newline="") as f:
+                header = next(csv.reader(f))
+            self._file = open(path, "a", newline="")
+            self._csv = csv.DictWriter(self._file, fieldnames=header)
+            fields = outdir.file("fields.json")
+            if os.path.isfile(fields):
+                with open(fields) as f:
+                    self.width = json.load(f)["section"]["width (along d2)"]
+            pvd = outdir.file("centreline.pvd")
+            if os.path.isfile(pvd) and self.width is not None:
+                kept = {}
+                for ds in ET.parse(pvd).getroot().iter("DataSet"):
+                    tf = float(ds.get("timestep"))
+                    if tf <= t * (1 + 1e-12) + 1e-300:
+                        name = ds.get("file")
+                        kept.setdefault(tf, []).append((name, name.replace("centreline/", "surface/", 1)))
+                self.frames = sorted(kept.items())
+    return ResumedWriter()

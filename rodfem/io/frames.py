@@ -1,0 +1,129 @@
+"""The two VTK pictures of a body at one frame (rank 0): its centreline and its surface.
+
+centreline  one vtkPolyLine through the nodes in order of s (a rigid body: one vertex), point data:
+            s, the nodal state fields (velocities, directors, multipliers, ...), the section frame
+            d1, d2, d3 (a planar model's d1, d2 from phi; its d3 is e_z), and the model's derived fields
+            (strains, stress resultants) at the nodes: exact inside a cell, the mean of the two
+            cells' values at a node between cells (where such a field jumps).
+surface     the section swept along the centreline (rodfem/io/sections.py), one ring per node (at
+            most MAX_SEGMENTS segments per body: more nodes are thinned evenly), point data s and
+            the velocities, cell data the derived fields of the segment, exact at its
+            midpoint (strains and stress resultants cell by cell, jumps included); a rigid body: its box.
+Planar models are drawn in the plane z = 0 (2-vectors get z = 0).
+"""
+import numpy as np
+
+from rodfem.io.sections import box, rotation_minimizing, section_points, stride, sweep
+from rodfem.io.snapshot import at_midpoints, at_nodes
+from rodfem.io.vtk import Array, PolyData
+
+MAX_SEGMENTS = 1000
+FRAME_LABEL = "section frame {} (d1: the axis; d2 (width) and d3 (height) span the section)"
+
+
+def components(labels, name, size):
+    """Component names of an array (from the model's labels; x, y, z for an unlabelled 2- or 3-vector)."""
+    comps = tuple(labels.get(name, ("", ()))[1])
+    if not comps and size in (2, 3):
+        comps = ("x", "y", "z")[:size]
+    return comps
+
+
+def _array(labels, name, values):
+    values = np.asarray(values, dtype=float)
+    values = values[:, 0] if values.ndim == 2 and values.shape[1] == 1 else values
+    comps = components(labels, name, 1 if values.ndim == 1 else values.shape[1])
+    if values.ndim == 2 and values.shape[1] == 2 and comps == ("x", "y"):   # a planar vector: z = 0
+        values, comps = np.column_stack([values, np.zeros(len(values))]), ("x", "y", "z")
+    return Array(values, comps)
+
+
+def point_arrays(state, labels, rings=None, keep=None):
+    """{name: Array} of the nodal fields (and frame) of `state`, at the nodes `rings` (all by default);
+    only s and the fields named in `keep`, if given."""
+    pick = slice(None) if rings is None else rings
+    out = {}
+    if state.kind in ("rod", "line"):
+        out["s"] = Array(state.s[pick])
+    for name, vals in state.fields.items():
+        if keep is None or name in keep:
+            out[name] = _array(labels, name, vals[pick])
+    if state.directors is not None and keep is None:
+        for i in range(3 if state.dim == 3 else 2):       # (a planar model's d3 is e_z)
+            name = f"d{i + 1}"
+            if name not in out:
+                out[name] = Array(state.directors[pick, :, i], ("x", "y", "z"))
+    return out
+
+
+def centreline(state, labels):
+    """The centreline PolyData of a BodyState."""
+    n = len(state.position)
+    poly = PolyData(points=state.position)
+    if state.kind in ("rod", "line"):
+        poly.lines = [np.arange(n)]
+    else:
+        poly.verts = [np.arange(n)]
+    poly.point_data = point_arrays(state, labels)
+    for name, vals in state.cells.items():
+        if name != "s":
+            poly.point_data[name] = _array(labels, name, at_nodes(vals, state.degree))
+    return poly
+
+
+def surface(state, labels, width, box_size, keep=()):
+    """The surface PolyData of a BodyState: a rod's section (width x width/2), a string's round tube
+    (diameter width/2), a rigid body's box of edges box_size(state.box, width).  Point data: s and the
+    nodal fields named in `keep` (the velocities); cell data: the derived fields."""
+    if state.kind in ("box", "point"):
+        frame = state.directors[0] if state.directors is not None else np.eye(3)
+        points, polys = box(state.position[0], frame, box_size(state.box, width))
+        return PolyData(points=points, polys=polys)
+    n = len(state.position)
+    rings = stride(n, MAX_SEGMENTS)
+    centre = state.position[rings]
+    if state.kind == "rod":
+        e2, e3 = state.directors[rings, :, 1], state.directors[rings, :, 2]
+        section = section_points(width, 0.5 * width, round_=False)
+    else:
+        e2, e3 = rotation_minimizing(centre)
+        section = section_points(0.5 * width, 0.5 * width, round_=True)
+    points, polys = sweep(centre, e2, e3, section, caps=state.kind == "rod")
+    m = len(section)
+    poly = PolyData(points=points, polys=polys)
+    poly.point_data = {k: Array(np.repeat(a.values, m, axis=0), a.components)
+                       for k, a in point_arrays(state, labels, rings, keep).items()}
+    # the segment of a surface segment [rings[j], rings[j+1]]: the node segment at its middle
+    seg = (rings[:-1] + rings[1:] - 1) // 2
+    order = np.repeat(seg, m)
+    if state.kind == "rod":                 # the caps take the values of the end segments
+        order = np.concatenate([[seg[0]], order, [seg[-1]]])
+    for name, vals in state.cells.items():
+        if name != "s":
+            poly.cell_data[name] = _array(labels, name, at_midpoints(vals)[order])
+    return poly
+
+
+def describe(state, labels, omitted, keep=()):
+    """What the files hold for this body: {file: {array: {"components", "description"}}} (fields.json)."""
+    def entry(name, arr):
+        what = labels.get(name, ("", ()))[0]
+        if not what and name.startswith("d") and name[1:] in "123":
+            what = FRAME_LABEL.format(name)
+        if name == "s":
+            what = "arc length of the reference configuration"
+        return {"components": list(arr.components), "description": what}
+    cl = centreline(state, labels)
+    nodal = {k: entry(k, a) for k, a in cl.point_data.items()}
+    derived = [k for k in state.cells if k != "s"]
+    for k in derived:
+        nodal[k]["description"] += "; at a node between two cells the mean of their values"
+    out = {"kind": state.kind, "centreline point data": nodal}
+    if state.kind in ("rod", "line"):
+        out["surface point data"] = {k: v for k, v in nodal.items() if k == "s" or k in keep}
+        out["surface cell data"] = {k: dict(nodal[k], description=labels.get(k, ("", ()))[0] +
+                                            "; the value at the segment's midpoint") for k in derived}
+    if omitted:
+        out["omitted"] = {k: "not written: the model has no inertia here (statics through the integrator), "
+                             "so its velocities are not the body's motion" for k in omitted}
+    return out

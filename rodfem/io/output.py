@@ -1,0 +1,312 @@
+"""What a run leaves on disk (rank 0 writes; every file is flushed as it goes):
+
+* history.csv    one row per time level: t, H, supplied, (dissipated,) newton_its, balance_error, observables
+                 (`dissipated`, the cumulative sum h d_n, only for a dissipating model)
+* summary.json   parameters, versions, elements, dofs, timing, balance errors, status
+                 ("running" from the start, replaced at the end by "completed",
+                 "newton-failure", "interrupted" or "error")
+* centreline.pvd, centreline/   each body as one VTK polyline (.vtp, one per frame and body:
+                 the nodes in order, nodal fields, section frame, strains and stress resultants)
+* surface.pvd, surface/         each body's surface: its section swept along the centreline and
+                 turned with the directors (rods), a tube (strings), a box (rigid bodies), with the
+                 strains and stress resultants cell by cell (rodfem/io/frames.py)
+* fields.json    what every array of those files is (components, description), per body
+* shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
+                 (one GIF frame per .pvd frame; rodfem/io/animation.py)
+
+The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included); the
+section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
+computed from the state gathered on rank 0 (rodfem/io/snapshot.py): the same on any number of ranks.
+
+A run owns its directory (`OutDir`): a lock (``fcntl.flock`` on .rodfem.lock)
+refuses a second run into it while the first is running, and a new run first
+removes the files a previous run wrote there (the names above; other files are
+left alone), so a directory never mixes two runs.  summary.json, the frames,
+the .pvd files and the pictures are written to a temporary file and renamed
+(`replace_atomically`): a killed run leaves no half-written file.  A file that
+cannot be written ends the run with an InputError naming --out, on every rank.
+"""
+import csv
+import errno
+import fcntl
+import glob
+import json
+import os
+from contextlib import contextmanager, suppress
+
+import numpy as np
+
+from rodfem.fem import compat
+from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
+from rodfem.errors import InputError, agreed
+from rodfem.io.frames import centreline, describe, surface
+from rodfem.io.snapshot import BodyView
+from rodfem.io.vtk import write_pvd, write_vtp
+
+OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
+             "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
+             "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
+             "checkpoint.npz", "checkpoint.npz.tmp*")
+LOCK_FILE = ".rodfem.lock"
+
+
+def replace_atomically(path, write):
+    """Create `path` by write(temporary path) in the same directory, then os.replace (never half-written)."""
+    tmp = os.path.join(os.path.dirname(path), "." + os.path.basename(path) + ".tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        with suppress(FileNotFoundError):
+            os.unlink(tmp)
+
+
+def json_ready(x):
+    """JSON has no NaN or infinity: non-finite numbers become the strings "nan", "inf", "-inf"."""
+    if isinstance(x, dict):
+        return {k: json_ready(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [json_ready(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else str(float(x))
+    return x
+
+
+def write_json(path, data):
+    """`data` as JSON, replacing `path` atomically; on a full disk, overwritten in place
+    (which frees its blocks first)."""
+    text = json.dumps(json_ready(data), indent=2, default=float)
+
+    def write(target):
+        with open(target, "w") as f:
+            f.write(text)
+    try:
+        replace_atomically(path, write)
+    except OSError as e:
+        if e.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) or not os.path.exists(path):
+            raise
+        write(path)
+
+
+class OutDir:
+    """The --out directory of one run, owned for the run's duration (see the module docstring).
+
+    Rank 0 does the file work; `do` is collective and turns an OSError into an InputError on every rank.
+    """
+
+    def __init__(self, path, comm):
+        self.path, self.comm = str(path), comm
+        self.root = comm.rank == 0
+        self._lock = None
+
+    def file(self, name):
+        return os.path.join(self.path, name)
+
+    def do(self, what, fn, *args, hint=""):
+        """Collective: rank 0 runs fn(*args); an OSError there ends the run on every rank (InputError)."""
+        with agreed(self.comm):
+            if self.root:
+                try:
+                    fn(*args)
+                except OSError as e:
+                    raise InputError(f"--out {self.path!r}: cannot {what} ({e.strerror or e}){hint}") from None
+
+    @contextmanager
+    def claimed(self, summary, clear=True):
+        """Lock the directory, clear a previous run's files (not when `clear` is false: a run resumed
+        from its checkpoint, rodfem/io/checkpoint.py), write summary.json (status "running");
+        release the lock at the end of the block."""
+        self.do("create the directory", os.makedirs, os.path.join(self.path, "centreline"), 0o777, True,
+                hint="; --out must name a directory that can be created and written")
+        try:
+            self.do("lock the directory", self._take_lock)
+            if clear:
+                self.do("remove the previous run's files", self._clear)
+            self.do("write summary.json", write_json, self.file("summary.json"), summary)
+            yield self
+        finally:
+            if self._lock is not None:
+                os.close(self._lock)
+                self._lock = None
+
+    def _take_lock(self):
+        fd = os.open(self.file(LOCK_FILE), os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = os.read(fd, 32).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise InputError(f"--out {self.path!r} is in use by another rodfem run (pid {owner}): "
+                             f"wait for it to end or choose another directory") from None
+        self._lock = fd
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+
+    def _clear(self):
+        for pattern in OWN_FILES:
+            for path in glob.glob(os.path.join(glob.escape(self.path), pattern)):
+                os.unlink(path)
+
+
+def frame_levels(n_steps, frames):
+    """The time levels (0..n_steps) written as frames: `frames` of them, evenly spaced, t = 0 and t_end
+    included; every level if there are fewer; t_end alone for frames = 1."""
+    if frames <= 1:
+        return {n_steps}
+    k = min(frames, n_steps + 1)
+    return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
+
+
+def bodies_of(problem):
+    """[(name, body)]: the bodies of a System, or the single body of a Problem."""
+    refs = getattr(problem, "bodies", None)
+    return [(name, ref.body) for name, ref in refs.items()] if refs else [("", problem)]
+
+
+class RunWriter:
+    """Writes a run into a claimed OutDir: history rows, frames (centreline, surface), and at the end
+    summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
+
+    def __init__(self, out, problem, n_steps, frames=100, section=0.0):
+        self.out, self.problem = out, problem
+        self.levels = frame_levels(n_steps, frames)
+        self.views = [BodyView(name, body) for name, body in bodies_of(problem)]
+        self.section, self.width = float(section), None
+        self.count, self.frames, self.snapshots = 0, [], []
+        self.dim = max(v.dim for v in self.views)
+        self._file = self._csv = None
+
+    # -- per step (collective) ----------------------------------------------------
+    def record(self, row, problem):
+        self.out.do("write history.csv", self._append, row)
+        if self.count in self.levels:
+            self.frame(row["t"])
+        self.count += 1
+
+    def _append(self, row):
+        if self._csv is None:
+            self._file = open(self.out.file("history.csv"), "w", newline="")
+            self._csv = csv.DictWriter(self._file, fieldnames=list(row))
+            self._csv.writeheader()
+        self._csv.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+        self._file.flush()
+
+    def frame(self, t):
+        states = [view.gather() for view in self.views]  # collective
+        self.out.do("write a frame", self._write_frame, t, states)
+
+    def file_name(self, kind, k, view):
+        """centreline/frame_00007.vtp (one body) or centreline/frame_00007_crank.vtp (a system's body)."""
+        return f"{kind}/frame_{k:05d}{'_' + view.name if len(self.views) > 1 else ''}.vtp"
+
+    def _write_frame(self, t, states):
+        k = len(self.frames)
+        if k == 0:
+            self._first_frame(states)
+        names = []
+        for view, state in zip(self.views, states):
+            files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
+            polys = (centreline(state, view.labels),
+                     surface(state, view.labels, self.width, box_size, view.rates))
+            for name, poly in zip(files, polys):
+                replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
+            names.append(files)
+        self.frames.append((t, names))
+        self.snapshots.append((t, [sketch(state, self.width) for state in states]))
+        for i, kind in enumerate(("centreline", "surface")):
+            series = [(tf, b, files[b][i], view.name) for tf, files in self.frames
+                      for b, view in enumerate(self.views)]
+            replace_atomically(self.out.file(kind + ".pvd"), lambda tmp, d=series: write_pvd(tmp, d))
+
+    def _first_frame(self, states):
+        """The section's width (the parameter, or a 25th of the longest body), surface/, fields.json."""
+        lengths = [np.ptp(s.s) for s in states if s.kind in ("rod", "line")]
+        boxes = [np.max(s.box) for s in states if s.box is not None]
+        self.width = self.section or (max(lengths) / 25 if lengths else max(boxes, default=4.0) / 4)
+        os.makedirs(self.out.file("surface"), exist_ok=True)
+        fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
+                              "string diameter": 0.5 * self.width},
+                  "bodies": {view.name or "body": dict(model=type(view.model).__name__,
+                                                       **describe(state, view.labels, view.omitted,
+                                                                  view.rates))
+                             for view, state in zip(self.views, states)}}
+        write_json(self.out.file("fields.json"), fields)
+
+    # -- at the end (also after a failure; collective) ----------------------------------
+    def finish(self, summary, result):
+        """Close history.csv, write summary.json (replacing "running"), then the pictures; each is tried
+        even if one before failed (after a full disk, the summary may still fit), the first error raised."""
+        errors = []
+        for what, fn, *args in (("close history.csv", self._close),
+                                ("write summary.json", write_json, self.out.file("summary.json"), summary),
+                                ("write the plots", self._plots, result)):
+            try:
+                self.out.do(what, fn, *args)
+            except InputError as e:
+                errors.append(e)
+        if errors:
+            raise errors[0]
+
+    def _close(self):
+        if self._file is not None:
+            file, self._file, self._csv = self._file, None, None
+            file.close()  # closed even when its last flush fails
+
+    def _plots(self, result):
+        if result is not None and result.rows:
+            plot_energy(self.out.file("energy.png"), result)
+        if self.snapshots:
+            plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
+            write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
+
+
+def summarize(scene_name, params, problem, result, status="completed", failure=None):
+    """summary.json content."""
+    H = result.column("H") if result.rows else np.array([0.0])
+    its = result.column("newton_its")[1:] if len(result.rows) > 1 else np.array([0])
+    Hmax = float(np.max(np.abs(H))) or 1.0
+    return {
+        "scene": scene_name, "status": status, "failure": failure, "parameters": params,
+        "dolfinx_version": compat.dolfinx_version, "integrator": problem.integrator,
+        "elements": problem.describe_elements(), "n_elements": problem.n_elements, "dofs": problem.dofs,
+        "mpi_ranks": problem.comm.size, "linear_solver": problem.newton.linear_solver, "steps": result.steps, "wall_time_s": result.wall_time,
+        "time_per_step_ms": 1e3 * result.wall_time / max(result.steps, 1),
+        "newton_its_mean": float(its.mean()), "newton_its_max": int(its.max()),
+        "max_balance_error": result.max_balance_error,
+        "max_balance_error_relative": result.max_balance_error / Hmax,
+        "H_initial": float(H[0]), "H_final": float(H[-1]), "max_abs_H": Hmax,
+        "ports": [load.name for load in problem.loads], "supports": [f"{s.kind}@{s.end}" for s in problem.supports],
+        "joints": [f"{j.name}: {j.a.describe()} - {j.b.describe()}" for j in getattr(problem, "joints", [])],
+        "final": {k: v for k, v in (result.rows[-1].items() if result.rows else [])},
+    }
+
+
+def plot_energy(path, result):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    t, H, W = result.column("t"), result.column("H"), result.column("supplied")
+    err = np.abs(result.column("balance_error"))[1:]
+    dissipates = "dissipated" in result.rows[0]
+    fig, ax = plt.subplots(3 if dissipates else 2, 1, figsize=(7, 8 if dissipates else 6), sharex=True)
+    ax[0].plot(t, H, label=r"$H$ (Hamiltonian)")
+    ax[0].plot(t, W, "--", label=r"supplied work $\sum h\,y\cdot u$")
+    if dissipates:   # the dissipated energy also on its own scale (middle panel)
+        D = result.column("dissipated")
+        ax[0].plot(t, D, "-.", label=r"dissipated $\sum h\,d_n$")
+        ax[0].plot(t, H + D - W, ":", label=r"$H + \sum h\,d_n - \sum h\,y\cdot u$ (constant)")
+        ax[1].plot(t, D, "-.", color="C2")
+        ax[1].set_ylabel(r"dissipated $\sum h\,d_n$")
+        balance = r"$|H_{n+1} - H_n + h\,d_n - h\,y\cdot u|$"
+    else:
+        ax[0].plot(t, H - W, ":", label=r"$H - \sum h\,y\cdot u$ (constant)")
+        balance = r"$|H_{n+1} - H_n - h\,y\cdot u|$"
+    ax[0].set_ylabel("energy")
+    ax[0].legend()
+    floor = 1e-17 * max(np.max(np.abs(H)), 1e-300)  # below round-off: drawn at the floor
+    ax[-1].semilogy(t[1:], np.maximum(err, floor), ".", ms=3)
+    ax[-1].set_ylabel(balance)
+    ax[-1].set_xlabel("t")
+    fig.tight_layout()
+    replace_atomically(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    plt.close(fig)

@@ -1,0 +1,371 @@
+"""A rank's part of the interface Schur complement straight out of its LU: partial factorization.
+
+For the rank's matrix with its interface G ordered last,
+
+    K = [[A_II, A_IG],      = [[L_II, 0],   [[U_II, U_IG],
+         [A_GI, 0   ]]         [L_GI, I]] .  [0,    T   ]]
+
+Gaussian elimination of the interior rows only (no pivoting, in a fill-reducing order of I)
+leaves in the G x G corner T = -A_GI A_II^{-1} A_IG, the rank's term of the Schur complement
+S = A_GG + sum_r T_r.  No solve per interface column is needed (rodfem/la/schur.py's Z:
+one full forward and backward sweep per column), and an application is one sweep each way:
+
+    forward:   z_I = L_II^{-1} b_I,   z_G = -L_GI z_I   (= -A_GI A_II^{-1} b_I)
+    (the caller sums z_G over the ranks, adds b_G and solves S x_G = b_G + sum_r z_G)
+    backward:  x_I = U_II^{-1} (z_I - U_IG x_G).
+
+This is what MUMPS does with a Schur complement (ICNTL(19)); PETSc 3.18's own LU has no such
+option and MUMPS factors these chains 2-3x slower than PETSc's LU.  The kernels are a plain
+up-looking sparse LU (symbolic fill once per nonzero pattern, numeric per Jacobian) in C.
+
+The interior order (`interior_order`): the dofs with a zero diagonal (multipliers) after the dofs
+they couple to, the dofs next to the interface last (the fill of the G rows then stays small);
+for the rest the one with the least fill of RCM (both ways round) and AMD, or, after a zero pivot,
+nested dissection of the graph in RCM order, or AMD.
+"""
+import numpy as np
+
+from rodfem.fem import cbuild
+
+C_SOURCE = r"""
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+/* sum_p a[p] x[j[p]] over [p0, p1), four independent sums (the loop is latency-bound otherwise) */
+static inline double sparse_dot(int64_t p0, int64_t p1, const double* a, const int32_t* j, const double* x)
+{
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  int64_t p = p0;
+  for (; p + 4 <= p1; p += 4) {
+    s0 += a[p] * x[j[p]];
+    s1 += a[p + 1] * x[j[p + 1]];
+    s2 += a[p + 2] * x[j[p + 2]];
+    s3 += a[p + 3] * x[j[p + 3]];
+  }
+  for (; p < p1; ++p) s0 += a[p] * x[j[p]];
+  return (s0 + s1) + (s2 + s3);
+}
+
+/* Symbolic factorization: the pattern of every row of [L U] in the new numbering.  K's row i
+   (new numbering) is the original row perm[i]; its columns are iperm[kj].  Rows >= nI (the
+   interface) are eliminated against the interior columns only.  Returns the number of entries
+   (fi, fj filled when fj != NULL), or -1 when cap is too small. */
+int64_t plu_symbolic(int n, int nI, const int32_t* perm, const int32_t* iperm,
+                     const int32_t* ki, const int32_t* kj,
+                     int64_t* fi, int32_t* fj, int64_t* fdiag, int64_t cap)
+{
+  int32_t* next = malloc(sizeof(int32_t) * (n + 1));
+  int64_t nnz = 0;
+  fi[0] = 0;
+  for (int i = 0; i < n; ++i) {
+    int head = n;
+    next[head] = n;   /* sorted linked list of the row's columns, ended by n */
+    int32_t r = perm[i];
+    for (int32_t p = ki[r]; p < ki[r + 1]; ++p) {
+      int c = iperm[kj[p]];
+      int prev = head;
+      while (next[prev] < c) prev = next[prev];
+      if (next[prev] != c) { next[c] = next[prev]; next[prev] = c; }
+    }
+    if (i < nI) {   /* the diagonal is always in the pattern */
+      int prev = head;
+      while (next[prev] < i) prev = next[prev];
+      if (next[prev] != i) { next[i] = next[prev]; next[prev] = i; }
+    }
+    int limit = i < nI ? i : nI;
+    for (int k = next[head]; k < limit; k = next[k]) {
+      /* merge the U part of row k (columns > k) */
+      int prev = k;
+      for (int64_t p = fdiag[k] + 1; p < fi[k + 1]; ++p) {
+        int c = fj[p];
+        while (next[prev] < c) prev = next[prev];
+        if (next[prev] != c) { next[c] = next[prev]; next[prev] = c; }
+        prev = c;
+      }
+    }
+    for (int c = next[head]; c < n; c = next[c]) {
+      if (nnz >= cap) { free(next); return -1; }
+      fj[nnz] = c;
+      if (c == i) fdiag[i] = nnz;
+      ++nnz;
+    }
+    if (i >= nI) fdiag[i] = -1;
+    fi[i + 1] = nnz;
+  }
+  free(next);
+  return nnz;
+}
+
+/* The factor is kept split for the sweeps: the L rows in row order (lp, lj, la), the U rows of
+   the interior (1 / u_ii first, then the columns > i) in reverse row order (up[i] = start of row
+   i, uend[i] its end; ascending addresses for the backward sweep), the corner T dense. */
+
+/* Numeric factorization.  K's values: entry p of K is src[p] into (D, O, G) (D: 0..nD-1, O: next
+   nO, G: the rest), at the new column kcol[p].  Returns 0, or 1 + the row of a zero pivot. */
+int plu_numeric(int n, int nI, const int32_t* perm, const int32_t* ki, const int32_t* kcol, const int64_t* src,
+                int64_t nD, int64_t nO, const double* D, const double* O, const double* G,
+                const int64_t* lp, const int32_t* lj, double* la,
+                const int64_t* up, const int64_t* uend, const int32_t* uj, double* ua,
+                double* T, double* w)
+{
+  int nG = n - nI;
+  for (int i = 0; i < n; ++i) {
+    for (int64_t q = lp[i]; q < lp[i + 1]; ++q) w[lj[q]] = 0.0;
+    if (i < nI) {
+      w[i] = 0.0;
+      for (int64_t q = up[i] + 1; q < uend[i]; ++q) w[uj[q]] = 0.0;
+    } else {
+      for (int c = nI; c < n; ++c) w[c] = 0.0;
+    }
+    int32_t r = perm[i];
+    for (int32_t p = ki[r]; p < ki[r + 1]; ++p) {
+      int64_t s = src[p];
+      w[kcol[p]] += s < nD ? D[s] : (s < nD + nO ? O[s - nD] : G[s - nD - nO]);
+    }
+    for (int64_t q = lp[i]; q < lp[i + 1]; ++q) {
+      int k = lj[q];
+      double l = w[k] * ua[up[k]];
+      la[q] = l;
+      if (l != 0.0)
+        for (int64_t t = up[k] + 1; t < uend[k]; ++t) w[uj[t]] -= l * ua[t];
+    }
+    if (i < nI) {
+      double d = w[i];
+      if (d == 0.0 || !isfinite(d)) return 1 + i;
+      ua[up[i]] = 1.0 / d;
+      for (int64_t q = up[i] + 1; q < uend[i]; ++q) ua[q] = w[uj[q]];
+    } else {
+      for (int c = nI; c < n; ++c) T[(size_t)(i - nI) * nG + (c - nI)] = w[c];
+    }
+  }
+  return 0;
+}
+
+/* Forward sweep: x (new numbering, length n) <- [z_I; z_G] from b (row i of the interior read
+   at b[where[i]]; the G part of the right-hand side is taken as zero). */
+void plu_forward(int n, int nI, const int32_t* where, const int64_t* lp, const int32_t* lj, const double* la,
+                 const double* b, double* x)
+{
+  for (int i = 0; i < nI; ++i) x[i] = b[where[i]] - sparse_dot(lp[i], lp[i + 1], la, lj, x);
+  for (int i = nI; i < n; ++i) x[i] = -sparse_dot(lp[i], lp[i + 1], la, lj, x);
+}
+
+/* Backward sweep: x[0..nI) <- U_II^{-1} (x_I - U_IG x_G), x[nI..n) holding x_G; out[where] <- x_I. */
+void plu_backward(int nI, const int32_t* where, const int64_t* up, const int64_t* uend, const int32_t* uj,
+                  const double* ua, double* x, double* out)
+{
+  for (int i = nI - 1; i >= 0; --i) {
+    x[i] = (x[i] - sparse_dot(up[i] + 1, uend[i], ua, uj, x)) * ua[up[i]];
+    out[where[i]] = x[i];
+  }
+}
+"""
+
+C_DECL = """
+int64_t plu_symbolic(int n, int nI, const int32_t* perm, const int32_t* iperm, const int32_t* ki, const int32_t* kj,
+                     int64_t* fi, int32_t* fj, int64_t* fdiag, int64_t cap);
+int plu_numeric(int n, int nI, const int32_t* perm, const int32_t* ki, const int32_t* kcol, const int64_t* src,
+                int64_t nD, int64_t nO, const double* D, const double* O, const double* G,
+                const int64_t* lp, const int32_t* lj, double* la,
+                const int64_t* up, const int64_t* uend, const int32_t* uj, double* ua,
+                double* T, double* w);
+void plu_forward(int n, int nI, const int32_t* where, const int64_t* lp, const int32_t* lj, const double* la,
+                 const double* b, double* x);
+void plu_backward(int nI, const int32_t* where, const int64_t* up, const int64_t* uend, const int32_t* uj,
+                  const double* ua, double* x, double* out);
+"""
+
+
+def interior_order(ki, kj, nI, nG, method, postpone=None, reverse=False):
+    """A fill-reducing order of the interior (K's rows 0..nI-1) by PETSc (`method`: rcm, nd, amd;
+    `reverse`: turned round), the interior dofs that couple to the interface G next, G (rows
+    nI..) last.
+
+    `postpone` (bool, interior rows): dofs with a zero diagonal (multipliers of constraints) are
+    left out of the fill-reducing order and placed after their partners (below): their pivot is
+    then the Schur complement -B A^{-1} B^T of the dofs they constrain, not zero (the LU does not
+    pivot).  (Ordered with the rest, the multipliers cost the 3D rod's RCM band 40 % more fill.)"""
+    import scipy.sparse as sp
+    from petsc4py import PETSc
+    n = nI + nG
+    K = sp.csr_matrix((np.ones(len(kj)), kj, ki), shape=(n, n))
+    graph = (K + K.T).tocsr()[:nI, :nI]
+    graph.sort_indices()
+
+    def petsc_order(g, kind):
+        M = PETSc.Mat().createAIJ(size=g.shape, csr=(g.indptr.astype(PETSc.IntType), g.indices.astype(PETSc.IntType),
+                                                     np.ones(g.nnz)), comm=PETSc.COMM_SELF)
+        rows, _ = M.getOrdering(kind)
+        order = np.asarray(rows.getIndices(), dtype=np.int64)
+        M.destroy()
+        return order
+
+    # the fill-reducing order of the dofs with a pivot of their own that do not couple to the
+    # interface; those that do come last (an interface row's fill is then the U rows of these
+    # only), the postponed ones are placed after their partners below.  (Keeping the dofs next to
+    # the interface last costs AMD fill: 4.1 on a rank's half of the 3D rod at 1024 elements,
+    # against 2.8 for the same block without them last; RCM, 3.7, is then chosen.)
+    near = np.zeros(nI, bool)
+    if nG:
+        near[(K[:nI, nI:] + K[nI:, :nI].T).tocoo().row] = True
+    held = np.zeros(nI, bool) if postpone is None else np.asarray(postpone, bool).copy()
+    own = np.flatnonzero(~held & ~near)
+    g = graph[own][:, own].tocsr()
+    g.sort_indices()
+    if method == "nd":   # nested dissection of the graph in RCM order (its tie-breaks follow the chain)
+        first = petsc_order(g, "rcm")
+        h = g[first][:, first].tocsr()
+        h.sort_indices()
+        order = first[petsc_order(h, "nd")]
+    else:
+        order = petsc_order(g, method)
+    order = own[order]
+    if reverse:
+        order = order[::-1]
+    order = np.concatenate([np.flatnonzero(held & ~near), order, np.flatnonzero(near)])
+    if postpone is not None and np.any(postpone):
+        # in rounds: a postponed dof goes right after the last of its partners placed so far, the
+        # dofs k with K_zk and K_kz both nonzero (only those give its pivot a term -K_zk K_kz / u_kk)
+        # (round k adds 2^-k: a massless director rate after the stresses it couples to, then a
+        # multiplier that constrains only that rate after it)
+        pairs = K[:nI, :nI].multiply(K[:nI, :nI].T).tocsr()
+        position = np.empty(nI, np.float64)
+        position[order] = np.arange(nI)
+        placed = ~np.asarray(postpone, bool)
+        rows = np.repeat(np.arange(nI), np.diff(pairs.indptr))
+        for k in range(1, 30):
+            waiting = ~placed[rows] & placed[pairs.indices]
+            if not waiting.any():
+                break
+            last = np.full(nI, -np.inf)
+            np.maximum.at(last, rows[waiting], position[pairs.indices[waiting]])
+            now = np.isfinite(last) & ~placed
+            position[now] = last[now] + 0.5 ** k
+            placed |= now
+        order = np.argsort(position, kind="stable")
+    return np.concatenate([order, np.arange(nI, n)]).astype(np.int32)
+
+
+class PartialLU:
+    """LU of K (CSR ki, kj: interior rows 0..nI-1, interface rows nI..nI+nG-1) with the interface
+    eliminated last; `src` maps K's entries to the value arrays (D, O, G) given at `factor`."""
+
+    def __init__(self, ki, kj, nI, nG, src, nD, nO, method="rcm", where=None, postpone=None):
+        self.mod = cbuild.load("rodfem_partial_lu", C_SOURCE, C_DECL)
+        self.n, self.nI, self.nG = nI + nG, nI, nG
+        self.ki, self.kj = np.ascontiguousarray(ki, np.int32), np.ascontiguousarray(kj, np.int32)
+        self.src, self.nD, self.nO = np.ascontiguousarray(src, np.int64), int(nD), int(nO)
+        self.method = method
+        # The fill of a band order depends on its direction (K's pattern is not symmetric) and on
+        # where the interface is: on the 3D rod's Jacobian (1024 elements) RCM gives 3.7 or 8.1
+        # entries of the factor per entry of K on each of two ranks, AMD 4.1; on one rank RCM
+        # 6.8 either way, AMD 2.8.  So "rcm" tries these three orders and keeps the least fill.
+        best = None
+        tries = (("amd", False), ("rcm", False), ("rcm", True)) if method == "rcm" else ((method, False),)
+        for kind, reverse in tries:
+            self.perm = interior_order(self.ki, self.kj, nI, nG, kind, postpone, reverse)
+            self.iperm = np.empty_like(self.perm)
+            self.iperm[self.perm] = np.arange(self.n, dtype=np.int32)
+            nnz = self._symbolic_count(limit=best[0] if best else None)   # (given up above the best)
+            if nnz is not None and (best is None or nnz < best[0]):
+                best = (nnz, self.perm, self.iperm, self._pattern)
+        _, self.perm, self.iperm, self._pattern = best
+        # where = positions of K's interior rows in the caller's vectors (default: 0..nI-1)
+        where = np.arange(nI) if where is None else np.asarray(where)
+        self.bidx = np.ascontiguousarray(where[self.perm[:nI]], dtype=np.int32)
+        self._symbolic()
+
+    def _symbolic_count(self, limit=None):
+        """The factor's pattern in the order perm (C): its number of entries (kept in self._pattern),
+        or None if it has more than `limit`."""
+        lib = self.mod.lib
+        n, nI = self.n, self.nI
+        fi = np.zeros(n + 1, np.int64)
+        fdiag = np.zeros(n, np.int64)
+        cap = 4 * len(self.kj) + n if limit is None else limit
+        while True:
+            fj = np.zeros(cap, np.int32)
+            nnz = lib.plu_symbolic(n, nI, self._p(self.perm, "int32_t"), self._p(self.iperm, "int32_t"),
+                                   self._p(self.ki, "int32_t"), self._p(self.kj, "int32_t"),
+                                   self._p(fi, "int64_t"), self._p(fj, "int32_t"), self._p(fdiag, "int64_t"), cap)
+            if nnz >= 0:
+                break
+            if limit is not None:
+                return None
+            cap *= 2
+        self._pattern = (self.perm, fi, fj[:nnz])
+        return int(nnz)
+
+    def _symbolic(self):
+        """The pattern of the factor, split into L rows and reversed U rows (numpy)."""
+        n, nI = self.n, self.nI
+        if self._pattern[0] is not self.perm:
+            self._symbolic_count()
+        _, fi, fj = self._pattern
+        nnz = len(fj)
+        del self._pattern
+        rows = np.repeat(np.arange(n), np.diff(fi))
+        lower = fj < np.minimum(rows, nI)
+        self.lj = np.ascontiguousarray(fj[lower])
+        self.lp = np.concatenate([[0], np.cumsum(np.bincount(rows[lower], minlength=n))]).astype(np.int64)
+        upper = ~lower & (rows < nI)                    # the interior rows' U parts, diagonal first
+        ur, uc = rows[upper], fj[upper]
+        order = np.lexsort((uc, -ur))                   # rows nI-1 ... 0, each by column
+        self.uj = np.ascontiguousarray(uc[order])
+        counts = np.bincount(ur, minlength=nI)[:nI]
+        self.uend = np.zeros(nI, np.int64)
+        self.uend[::-1] = np.cumsum(counts[::-1])
+        self.up = self.uend - counts
+        self.la, self.ua = np.zeros(len(self.lj)), np.zeros(len(self.uj))
+        self.kcol = np.ascontiguousarray(self.iperm[self.kj], dtype=np.int32)
+        self.w = np.zeros(n)
+        self.x = np.zeros(n)
+        self.T = np.zeros((self.nG, self.nG))
+        self.nnz = int(nnz)
+        # cffi views of the arrays the kernels take, made once (the arrays are not reallocated)
+        self.c = {name: self._p(getattr(self, name), kind) for name, kind in (
+            ("perm", "int32_t"), ("bidx", "int32_t"), ("ki", "int32_t"), ("kcol", "int32_t"), ("src", "int64_t"),
+            ("lp", "int64_t"), ("lj", "int32_t"), ("la", "double"), ("up", "int64_t"), ("uend", "int64_t"),
+            ("uj", "int32_t"), ("ua", "double"), ("T", "double"), ("w", "double"), ("x", "double"))}
+
+    def _p(self, a, kind):
+        return self.mod.ffi.from_buffer(f"{kind}[]", a)
+
+    @property
+    def fill(self):
+        """Entries of the factor per entry of K."""
+        return self.nnz / max(len(self.kj), 1)
+
+    def factor(self, D, O, G):
+        """Factor with the values D, O (addresses or arrays, O may be None) and G (array or None);
+        returns the corner T = -A_GI A_II^{-1} A_IG, or None after a zero pivot."""
+        ffi, lib = self.mod.ffi, self.mod.lib
+
+        def pointer(a):   # an address (int), an array or None
+            if a is None:
+                return ffi.NULL
+            return ffi.cast("double*", a) if isinstance(a, int) else self._p(np.ascontiguousarray(a), "double")
+        dp, op = pointer(D), pointer(O)
+        gp = self._p(np.ascontiguousarray(G, dtype=np.float64).reshape(-1), "double") if G is not None and np.size(G) \
+            else ffi.NULL
+        c = self.c
+        status = lib.plu_numeric(self.n, self.nI, c["perm"], c["ki"], c["kcol"], c["src"], self.nD, self.nO,
+                                 dp, op, gp, c["lp"], c["lj"], c["la"], c["up"], c["uend"], c["uj"], c["ua"],
+                                 c["T"], c["w"])
+        return None if status else self.T
+
+    def forward(self, b):
+        """z_G = -A_GI A_II^{-1} b_I (b_I read from b at `where`); keeps z_I."""
+        c = self.c
+        b = np.ascontiguousarray(b, dtype=np.float64)
+        self.mod.lib.plu_forward(self.n, self.nI, c["bidx"], c["lp"], c["lj"], c["la"], self._p(b, "double"), c["x"])
+        return self.x[self.nI:].copy()
+
+    def backward(self, xG, out):
+        """out[where] <- A_II^{-1} (b_I - A_IG x_G), after forward(b)."""
+        c = self.c
+        self.x[self.nI:] = xG
+        self.mod.lib.plu_backward(self.nI, c["bidx"], c["up"], c["uend"], c["uj"], c["ua"], c["x"],
+                                  self._p(out, "double"))

@@ -1,0 +1,1 @@
+"""Nonlinear solvers: Newton's method (petsc4py SNES) for a step's residual."""

@@ -1,0 +1,313 @@
+"""Newton's method for the step residual F(x_{n+1}) = 0 with a petsc4py SNES.
+
+Jacobian J = dF/dx_{n+1} from ufl.derivative; forms are compiled once and
+reused every step; a single body's Jacobian is assembled by rodfem/fem/fastassembly.py
+(DOLFINx's matrix, without its per-entry search).  Direct solves: in serial PETSc's
+own LU in RCM order (3x faster than MUMPS on these banded systems); in parallel
+the exact Schur complement over the rank interfaces of rodfem/la/schur.py
+(MUMPS, the former parallel default, was 4-10x slower than serial and ran out of
+workspace at 10^4 elements).  PETSc's LU does not pivot, so a zero pivot (saddle
+points: multipliers, zero densities in statics) makes it fail; the serial solver
+then switches once, for the rest of the run, to the next LU of `LU_CHAIN` and
+repeats the step: the partial LU of rodfem/la/partial_lu.py (it orders each multiplier
+after the dofs it constrains; on the 3D rod 4x faster to factor than SuperLU), PETSc's
+LU in AMD order, then the pivoting LUs SuperLU and MUMPS; the parallel solver does
+the same inside the ranks (`Newton.linear_solver` tells which one ran).  (Not
+superlu_dist: it crashes at exit on this stack.)  Every setting can be overridden
+from the PETSc options database with the prefix ``rodfem_`` (e.g.
+``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``; MUMPS in parallel:
+``-rodfem_pc_type lu -rodfem_pc_factor_mat_solver_type mumps``).
+"""
+import os
+import re
+import time
+from dataclasses import dataclass
+
+from dolfinx.fem import petsc as fpetsc
+from petsc4py import PETSc
+
+from rodfem.fem import compat
+from rodfem.errors import InputError
+
+# Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
+# round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
+# ~ eps * stiffness, e.g. 2e-9 for EA = 1e7, while x is converged to the last digit).
+DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",
+            "snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_stol": 1e-14, "snes_max_it": 25,
+            "ksp_type": "preonly"}
+# The linear solver: serial, PETSc's own LU in reverse Cuthill-McKee order (on these banded
+# systems 25 % faster to factor and twice as fast to solve as the nested dissection default,
+# and more accurate: no pivoting, and RCM keeps the band's natural pivots); in parallel the
+# exact elimination over the rank interfaces of rodfem/la/schur.py.
+SERIAL = {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"}
+PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSchur"}
+# Large systems (>= LARGE unknowns) reuse the Jacobian and its factorization for five Newton
+# iterations, the count going on across steps (a model's own options win, e.g. the 3D rod's lag
+# 8): there the factorization is most of the cost, and every one costs the parallel solver its
+# interface solves too.  Measured on flying-spaghetti-2d (dt = 0.1, serial / mpirun -n 2, ms per
+# step): 10^4 elements full Newton 98 / 86 (3 iterations), lag 2 74 / 57, lag 3 53 / 42, lag 5
+# 43 / 32 (5 iterations, one factorization a step); 10^5 elements 930 / 839, 711 / 472, 532 / 368,
+# 465 / 297; the energy balance unchanged (Newton's tolerance).  A step this fails repeats with
+# full Newton.
+LARGE = 10_000
+LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
+# The LUs to try, in order, each after the previous one met a zero pivot (name: PETSc options).
+# PETSc's own LU does not pivot: in RCM order a multiplier (the 3D rod's collocated constraints,
+# joints) is a zero pivot.  Next comes the partial LU of rodfem/la/partial_lu.py (the parallel
+# solver's, here with no interface), which orders the multipliers after the dofs they constrain:
+# on the 3D rod's Jacobian (1024 elements, 73,758 unknowns, only its possible nonzeros:
+# rodfem/fem/fastassembly.py) it factors in 27 ms and solves in 1.9 ms (in AMD order, the least fill of
+# the orders it tries); PETSc's LU in AMD order meets
+# a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
+# -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
+# Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
+# LU reached that way that then fails Newton (a small pivot, not a zero one) hands over to the
+# next LU too.  SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4
+# elements, 1e8 nonzeros: "Not enough memory", and destroying that failed factor crashes): above
+# SUPERLU_NONZEROS MUMPS comes straight after.
+LU_CHAIN = {"petsc": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
+            "schur": {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSchur"},
+            "petsc-amd": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
+            "superlu": {"pc_type": "lu", "pc_factor_mat_solver_type": "superlu"},
+            "mumps": {"pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}}
+PIVOTING = ("superlu", "mumps")
+SUPERLU_NONZEROS = 4e7
+
+
+def lu_name(settings):
+    """The LU_CHAIN name of the LU that `settings` select."""
+    if settings.get("pc_type") == "python":
+        return "schur"
+    solver = settings.get("pc_factor_mat_solver_type", "petsc")
+    if solver == "petsc" and settings.get("pc_factor_mat_ordering_type", "rcm") == "amd":
+        return "petsc-amd"
+    return solver
+
+
+def next_lu(A, failed):
+    """The LU to use after `failed` met a zero pivot on A (sequential AIJ or the local block of a
+    rank), or None when there is none left."""
+    names = list(LU_CHAIN)
+    if failed not in names or failed == names[-1]:
+        return None
+    following = names[names.index(failed) + 1]
+    if following == "superlu" and A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"] > SUPERLU_NONZEROS:
+        following = "mumps"
+    return following
+
+
+def mumps_options(prefix):
+    """MUMPS with AMD ordering and 4x its workspace estimate (its default METIS ordering and
+    workspace failed on these chains at 10^4 elements), unless the user chose otherwise."""
+    opts = PETSc.Options()
+    for key, value in (("mat_mumps_icntl_7", 0), ("mat_mumps_icntl_14", 300)):
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
+
+
+class NewtonFailure(RuntimeError):
+    """Newton did not converge in a time step."""
+
+    def __init__(self, step, t, residual, iterations, reason):
+        self.step, self.t, self.residual, self.iterations, self.reason = step, t, residual, iterations, reason
+        super().__init__(f"Newton failed at step {step} (t = {t:.6g}): residual {residual:.3e} "
+                         f"after {iterations} iterations ({reason})")
+
+
+@dataclass
+class Solve:
+    iterations: int
+    residual: float
+
+
+_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+
+def petsc_error(error, what):
+    """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
+    what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""
+    lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
+    reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
+    options = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
+    return InputError(f"{what}{options}: {reason}; rodfem's solver options have the prefix -rodfem_, "
+                      f"e.g. -rodfem_snes_max_it 50")
+
+
+class FormAssembler:
+    """F(x) and J(x) of one mixed space: compiled forms F, J, the state Function x, Dirichlet bcs.
+
+    The Jacobian goes through rodfem/fem/fastassembly.py (the same matrix, 5-10x faster than
+    DOLFINx's MatSetValues) when the form qualifies; `fast=False` keeps DOLFINx's assembly."""
+
+    def __init__(self, F, J, x, bcs, fast=True):
+        self.F, self.J, self.x, self.bcs = F, J, x, bcs
+        self.comm = x.function_space.mesh.comm
+        self.vector = compat.petsc_vec(x)   # the unknown, as the PETSc vector Newton iterates on
+        self.fast = None
+        if fast:
+            from rodfem.fem.fastassembly import FastJacobian
+            if FastJacobian.usable(J):
+                self.fast = FastJacobian(J, bcs)
+
+    def create_vector(self):
+        return compat.create_vector(self.F)
+
+    def create_matrix(self):
+        return self.fast.create_matrix() if self.fast else fpetsc.create_matrix(self.J)
+
+    def update(self, xin):
+        """Make the forms see the iterate xin (copied into x, ghosts updated)."""
+        xin.copy(self.vector)
+        self.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def residual(self, xin, b):
+        self.update(xin)
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.F)
+        if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
+            fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.vector], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.bcs:
+            fpetsc.set_bc(b, self.bcs, self.vector, -1.0)
+
+    def jacobian(self, xin, A):
+        if self.fast:
+            self.fast.assemble(A)
+            return
+        A.zeroEntries()
+        fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
+        A.assemble()
+
+
+class Newton:
+    """Solves F(x) = 0 for the Function `x` (F, J compiled forms, bcs Dirichlet conditions),
+    or, with `assembler=`, for any unknown an assembler provides (a system of bodies)."""
+
+    def __init__(self, F=None, J=None, x=None, bcs=(), options=None, prefix="rodfem_", assembler=None):
+        self.assembler = assembler or FormAssembler(F, J, x, list(bcs))
+        comm = self.assembler.comm
+        self.b = self.assembler.create_vector()
+        self.A = self.assembler.create_matrix()
+        self.xv = self.assembler.vector
+        self.settings = dict(DEFAULTS, **(SERIAL if comm.size == 1 else PARALLEL))
+        if self.A.getSize()[0] >= LARGE:
+            self.settings.update(LARGE_SETTINGS)
+        self.settings.update(options or {})
+        self.prefix = prefix
+        self.snes = PETSc.SNES().create(comm)
+        self.snes.setOptionsPrefix(prefix)
+        self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
+        self._configure(self.settings)
+        self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
+
+    @property
+    def bcs(self):
+        return self.assembler.bcs
+
+    def _residual(self, snes, xin, b):
+        t0 = time.perf_counter()
+        self.assembler.residual(xin, b)
+        self.timings["F"] += time.perf_counter() - t0
+
+    def _jacobian(self, snes, xin, A, P):
+        t0 = time.perf_counter()
+        self.assembler.jacobian(xin, A)
+        self.timings["J"] += time.perf_counter() - t0
+
+    def _configure(self, settings):
+        """Apply `settings` through the options database for this SNES only: the user's own
+        -rodfem_* options win, and ours are removed again so that they do not leak into the
+        next Problem of the process."""
+        opts, ours = PETSc.Options(), []
+        for key, value in settings.items():
+            if not opts.hasName(self.prefix + key):
+                opts[self.prefix + key] = value
+                ours.append(self.prefix + key)
+        try:
+            self.snes.setFromOptions()
+            self.snes.getKSP().setFromOptions()
+        except PETSc.Error as e:
+            raise petsc_error(e, "PETSc refused an option") from None
+        finally:
+            for name in ours:
+                opts.delValue(name)
+
+    @property
+    def linear_solver(self):
+        pc = self.snes.getKSP().getPC()
+        if pc.getType() == "python":
+            context = pc.getPythonContext()
+            return context.describe() if hasattr(context, "describe") else "python"
+        solver = pc.getFactorSolverType()
+        return lu_name(self.settings) if solver == "petsc" else solver
+
+    def use_lu(self, name):
+        """Factor with LU_CHAIN[name] from now on (the PC set up again at the next solve)."""
+        for key in ("pc_type", "pc_python_type", "pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
+            self.settings.pop(key, None)
+        self.settings.update(LU_CHAIN[name])
+        if name == "mumps":
+            mumps_options(self.prefix)
+        pc = self.snes.getKSP().getPC()   # (the rest of the SNES keeps its configuration)
+        pc.reset()
+        pc.setType(LU_CHAIN[name]["pc_type"])
+        if name == "schur":
+            from rodfem.la import petsc_raw
+            pc.setPythonType(LU_CHAIN[name]["pc_python_type"])
+            petsc_raw.pc_set_failed(pc, False)
+            return
+        pc.setFactorSolverType(LU_CHAIN[name]["pc_factor_mat_solver_type"])
+        if "pc_factor_mat_ordering_type" in LU_CHAIN[name]:
+            pc.setFactorOrdering(LU_CHAIN[name]["pc_factor_mat_ordering_type"])
+
+    def solve(self, step, t):
+        """Solve in place for x; raise NewtonFailure (never return a NaN state).
+
+        A chord Newton (``snes_lag_jacobian`` > 1: the Jacobian and its LU reused over
+        iterations) that fails repeats the step with a fresh Jacobian every iteration.
+        """
+        self.xv.copy(self._start)  # the initial guess (the callbacks overwrite x with each iterate)
+        return self._solve(step, t)
+
+    def _solve(self, step, t):
+        self._start.copy(self._work)
+        try:
+            self.snes.solve(None, self._work)
+        except PETSc.Error as e:  # not a divergence (that is a converged reason), but PETSc giving up
+            raise petsc_error(e, f"PETSc stopped at step {step} (t = {t:.6g})") from None
+        reason = self.snes.getConvergedReason()
+        lu = lu_name(self.settings)
+        switched = lu != "petsc" and lu not in PIVOTING   # an unpivoted LU reached after a zero pivot
+        if (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE or (reason <= 0 and switched)) \
+                and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
+            following = next_lu(self.A, lu)
+            if following is not None:
+                self.use_lu(following)
+                return self._solve(step, t)
+        its = self.snes.getIterationNumber()
+        res = self.snes.getFunctionNorm()
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN:
+            res = float("nan")  # PETSc leaves the last finite norm (0 at the first iteration)
+        if reason <= 0 or res != res:
+            if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
+                return self._solve_full_newton(step, t)
+            raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
+        self.assembler.update(self._work)
+        return Solve(its, res)
+
+    def _solve_full_newton(self, step, t):
+        chord = self.settings
+        self.settings = {**chord, "snes_lag_jacobian": 1}
+        self._configure(self.settings)
+        try:
+            return self._solve(step, t)
+        finally:
+            for key in ("pc_type", "pc_python_type", "pc_factor_mat_solver_type", "pc_factor_mat_ordering_type"):
+                chord.pop(key, None)
+                if key in self.settings:
+                    chord[key] = self.settings[key]
+            self.settings = chord
+            self._configure(chord)
