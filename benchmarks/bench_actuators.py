@@ -28,11 +28,10 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 
 from rodfem import Load, Problem, Support, run
-from rodfem.core.problem import compile_forms
-
 from rodfem.demos import soft_arm_swing
 from rodfem.demos._actuated import smoothstep, soft_arm_stiffness, soft_rod
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
+from rodfem.fem.jit import compile_forms
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 VARIANTS = {"end moment (no actuator)": dict(p_max=0.0, tau_max=0.0), "tendon": dict(p_max=0.0),

@@ -18,9 +18,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem import run
-from rodfem.nls.newton import NewtonFailure
-
 from rodfem.demos import flying_spaghetti_3d
+from rodfem.errors import NewtonFailure
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # Newton variants.  "default" is what the 3D scenes use (demos/_rod3d.py NEWTON:

@@ -22,7 +22,6 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem import run
-
 from rodfem.demos import _slider_crank_reference as exact
 from rodfem.demos import slider_crank_3d
 

@@ -10,8 +10,8 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from rodfem.app.scene import load
 from rodfem.analysis.statics import Statics
+from rodfem.app.scene import load
 
 CASES = [("roll-up-2d", {}, (8, 16, 32, 64)), ("roll-up-2d", {"turns": 10.0}, (64,)),
          ("roll-up-3d", {}, (8, 16, 32, 64, 128)), ("helix-3d", {}, (8, 16, 32, 64, 128))]

@@ -24,10 +24,10 @@ from mpi4py import MPI
 
 from rodfem import Load, Problem, Support, run
 from rodfem.app.driver import run_scene
-
 from rodfem.demos.crane_manoeuvre import scene as crane
 from rodfem.demos.hanging_cable import scene as hanging
-from rodfem.demos.taut_string_wave import scene as wave, speeds
+from rodfem.demos.taut_string_wave import scene as wave
+from rodfem.demos.taut_string_wave import speeds
 from rodfem.forms.string import String
 from rodfem.forms.string_materials import MATERIALS, tension_only
 

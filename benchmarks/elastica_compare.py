@@ -188,8 +188,8 @@ def err_of(tip, study):
 def rodfem_largest_dt(name, cfg, study, quick):
     """Largest dt (multiples of the scene dt) with Newton converging in every step, and its error."""
     from rodfem.app.driver import run_scene
-    from rodfem.nls.newton import NewtonFailure
     from rodfem.app.scene import load
+    from rodfem.errors import NewtonFailure
     scene = load(name)
     p = scene.values(cfg["overrides"])
     out = []
@@ -208,7 +208,7 @@ def rodfem_largest_dt(name, cfg, study, quick):
 
 
 def compare(name, quick, repeats):
-    from rodfem.analysis.study import run_study, plot_study
+    from rodfem.app.study import plot_study, run_study
     cfg = SCENES[name]
     base = os.path.join(HERE, "compare", name)
     print(f"== {name}: rodfem study", flush=True)

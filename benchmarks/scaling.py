@@ -154,7 +154,6 @@ def history_match(a, b):
 
 
 def write(rows, small, started, finished):
-    import numpy as np
     fields = ["scene", "elements", "dofs", "ranks", "wall_ms", "cpu_ms", "newton_its", "balance_rel", "mem_mb",
               "solver", "F_ms", "J_ms", "lu_ms", "solve_ms", "Z_ms", "S_ms", "load"]
     with open(os.path.join(HERE, "scaling.csv"), "w", newline="") as f:

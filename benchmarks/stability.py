@@ -40,11 +40,12 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-
 from rodfem.app.driver import run_scene
-from rodfem.nls.newton import DEFAULTS, NewtonFailure
-from rodfem.app.scene import ParameterError, scenes
+from rodfem.app.scene import scenes
+from rodfem.errors import NewtonFailure, ParameterError
+from rodfem.nls.newton import DEFAULTS
+
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 ATOL = DEFAULTS["snes_atol"]
 ACCURATE = 1e-2

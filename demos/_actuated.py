@@ -5,8 +5,8 @@
 # actuators whose input is not zero.)
 import numpy as np
 
-from rodfem.app.scene import Parameter, ParameterError, density, stiffness
-
+from rodfem.app.scene import Parameter, density, stiffness
+from rodfem.errors import ParameterError
 from rodfem.forms.cosserat_rod import CosseratRod
 
 # The soft arm.  Paper 1 (Kinon, Eugster, Betsch 2026, example 04) publishes

@@ -2,6 +2,7 @@
 # on every rank, the frame of a rigid body and the orthonormality of directors
 # (for history columns added with System.record).
 import numpy as np
+
 from rodfem.forms.cosserat_rod import DIRECTORS
 
 

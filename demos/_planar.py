@@ -1,7 +1,6 @@
 # Parameters shared by the planar-beam demos: the material law and the
 # element degree.  Each demo adds its own geometry and loads.
 from rodfem.app.scene import Parameter
-
 from rodfem.forms import planar_beam
 
 MATERIALS = {"hooke": planar_beam.quadratic, "log-axial": planar_beam.log_axial}

@@ -5,10 +5,9 @@
 import numpy as np
 
 from rodfem import Load
-from rodfem.app.scene import Parameter, ParameterError, density
-
+from rodfem.app.scene import Parameter, density
+from rodfem.errors import ParameterError
 from rodfem.forms import cosserat_rod
-
 
 # Newton options of the 3D rod scenes: a chord Newton that reuses the
 # Jacobian and its LU over up to 8 iterations, across steps (the 102 x 102

@@ -18,7 +18,6 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
-
 from rodfem.demos._planar import beam, material_parameters
 
 parameters = common(n_elements=10, dt=1e-3, t_end=1.0) + material_parameters() + [

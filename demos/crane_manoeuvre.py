@@ -25,9 +25,8 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
+from rodfem.demos._string_statics import static_equilibrium
 from rodfem.demos.hanging_cable import hanging_guess, material_parameters, string_model
-from rodfem.forms.string import static_equilibrium
 
 parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) cable length"),

@@ -57,13 +57,12 @@ import numpy as np
 from rodfem import Load, Support, System
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
 from rodfem.demos._multibody import nodal, orthonormality, rigid_frame
+from rodfem.demos._string_statics import static_equilibrium
 from rodfem.demos.crane_manoeuvre import trolley_force
 from rodfem.demos.hanging_cable import hanging_guess, material_parameters, string_model
 from rodfem.forms import joints
 from rodfem.forms.rigid_body import RigidBody
-from rodfem.forms.string import static_equilibrium
 
 parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-gradient") + material_parameters() + [
     stiffness("L", 1.0, "m", "reference (unstretched) cable length"),
@@ -87,7 +86,7 @@ def box_inertia(m, a, b, c):
 def hang(body, p):
     """Put the cable `body` at rest in its static equilibrium under its weight and the payload's:
     its own loads plus the payload weight m g as an end force, the trolley held (pinned) for
-    this solve (forms/string.py, static_equilibrium: then x_{n+1} = x_n, v = 0 solves the step)."""
+    this solve (demos/_string_statics.py, static_equilibrium: then x_{n+1} = x_n, v = 0 solves the step)."""
     weight = Load("v", [0.0, 0.0, -p["mass"] * p["g"]], "right", "payload weight (static)")
     static_equilibrium(SimpleNamespace(**{**vars(body), "loads": [*body.loads, weight]}),
                        supports=[Support("left", "pinned")])

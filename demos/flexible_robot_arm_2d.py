@@ -55,8 +55,6 @@ import sys
 from rodfem import Load, Support, System, constant_in_time
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
-
-
 from rodfem.forms import joints
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 from rodfem.forms.rigid_body import PlanarRigidBody, PointMass

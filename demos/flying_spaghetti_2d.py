@@ -19,7 +19,6 @@ import numpy as np
 from rodfem import Load, Problem, constant_in_time
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
-
 from rodfem.demos._planar import beam, material_parameters
 
 # ## Parameters (all can be changed with --set NAME=VALUE)

@@ -24,7 +24,6 @@ import numpy as np
 from rodfem import Load, Problem, constant_in_time
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common
-
 from rodfem.demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
 
 parameters = common(n_elements=10, dt=0.1, t_end=15.0) + [

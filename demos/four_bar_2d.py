@@ -24,9 +24,9 @@ import numpy as np
 
 from rodfem import Load, Support
 from rodfem.app.cli import main
-from rodfem.app.scene import Parameter, ParameterError, Scene, common, density, stiffness
+from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 from rodfem.core.system import System
-
+from rodfem.errors import ParameterError
 from rodfem.forms import joints
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 

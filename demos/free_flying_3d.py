@@ -43,7 +43,6 @@ from rodfem import Load, constant_in_time
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
 from rodfem.core.system import System
-
 from rodfem.demos._rod3d import NEWTON, end_moment, material_parameters, rod, straight
 from rodfem.forms import joints
 from rodfem.forms.rigid_body import RigidBody

@@ -29,8 +29,8 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
-from rodfem.forms.string import MATERIALS, String, map_positions, static_equilibrium
+from rodfem.demos._string_statics import static_equilibrium
+from rodfem.forms.string import MATERIALS, String, map_positions
 
 
 # ## Parameters shared by the string scenes

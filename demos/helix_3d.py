@@ -29,7 +29,6 @@ import numpy as np
 from rodfem import Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
 from rodfem.demos._rod3d import NEWTON, end_moment, smooth_ramp, straight
 from rodfem.forms.cosserat_rod import CosseratRod
 

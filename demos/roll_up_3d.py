@@ -22,7 +22,6 @@ import numpy as np
 from rodfem import Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
 from rodfem.demos._rod3d import NEWTON, end_moment, material_parameters, rod, smooth_ramp, straight
 
 EI = 500.0
@@ -36,7 +35,7 @@ parameters = common(n_elements=8, dt=0.02, t_end=1.0) + [
 def build(p, comm):
     # The full moment 2 pi EI_3 / L closes the circle (EI_3 = 1/C_M3).
     if p["C_M3"] == 0:
-        from rodfem.app.scene import ParameterError
+        from rodfem.errors import ParameterError
         raise ParameterError("parameter 'C_M3' must be > 0 here: a rod that cannot bend cannot roll up")
     moment = np.array([0.0, 0.0, 2 * np.pi / (p["C_M3"] * p["L"])])
     loads = [end_moment(smooth_ramp(moment, p["t_end"]), p["moment_frame"])]

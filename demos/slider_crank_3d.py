@@ -56,10 +56,9 @@ import numpy as np
 
 from rodfem import Load
 from rodfem.app.cli import main
-from rodfem.core.joints import ground
 from rodfem.app.scene import Parameter, Scene, common
+from rodfem.core.joints import ground
 from rodfem.core.system import System
-
 from rodfem.forms import joints
 from rodfem.forms.rigid_body import RigidBody
 

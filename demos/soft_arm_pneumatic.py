@@ -54,9 +54,14 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
-
-from rodfem.demos._actuated import CHAMBER_ANGLES, chamber_pressures, soft_arm_parameters, soft_arm_section, \
-    soft_arm_stiffness, soft_rod
+from rodfem.demos._actuated import (
+    CHAMBER_ANGLES,
+    chamber_pressures,
+    soft_arm_parameters,
+    soft_arm_section,
+    soft_arm_stiffness,
+    soft_rod,
+)
 from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
 from rodfem.forms import actuators
 

@@ -30,7 +30,6 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Scene, common, density, stiffness
-
 from rodfem.demos._actuated import smoothstep, soft_arm_parameters, soft_arm_section, soft_arm_stiffness, soft_rod
 from rodfem.demos._rod3d import NEWTON, straight
 from rodfem.forms import actuators

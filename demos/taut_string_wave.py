@@ -31,7 +31,6 @@ import numpy as np
 from rodfem import Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
 from rodfem.demos.hanging_cable import material_parameters, string_model
 from rodfem.forms.string import MATERIALS
 
@@ -57,7 +56,7 @@ def build(p, comm):
     lam, a, sig, s0 = p["stretch"], p["amplitude"], p["width"], p["s0"]
     N, c_s, c = speeds(p)
     if not N > 0:
-        from rodfem.app.scene import ParameterError
+        from rodfem.errors import ParameterError
         raise ParameterError(f"parameter 'stretch': the material {p['material']} has no tension at "
                              f"lambda_0 = {lam:g} (N = {N:g})")
 

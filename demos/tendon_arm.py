@@ -37,7 +37,6 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
-
 from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
 from rodfem.forms import actuators
 from rodfem.forms.cosserat_rod import CosseratRod

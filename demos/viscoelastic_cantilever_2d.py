@@ -32,7 +32,6 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, stiffness
-
 from rodfem.demos import cantilever_2d
 from rodfem.demos._planar import MATERIALS
 from rodfem.forms import planar_beam

@@ -39,7 +39,6 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
-
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod
 

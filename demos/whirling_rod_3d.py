@@ -21,7 +21,6 @@ import numpy as np
 from rodfem import Problem
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common
-
 from rodfem.demos._rod3d import NEWTON, material_parameters, rod, straight
 
 parameters = common(n_elements=8, dt=0.01, t_end=5.0) + [

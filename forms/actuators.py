@@ -91,8 +91,7 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from rodfem.app.scene import ParameterError
-
+from rodfem.errors import ParameterError
 from rodfem.forms import cosserat_rod
 from rodfem.forms.cosserat_rod import DIRECTORS, RATES
 

@@ -96,7 +96,6 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
-
 from rodfem.forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
@@ -208,7 +207,6 @@ class CosseratRod:
     position = "r"
     kinematics = {"r": "v", "d1": "w1", "d2": "w2", "d3": "w3"}   # configuration -> velocity: what joints act on
     frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
-    flows = {"force": "v", "moment": "w1"}   # a moment needs a pairing (spatial_moment, body_moment)
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
     # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {**{d: (f"director {d} (d1 the axis, d2 and d3 span the section)", ("x", "y", "z")) for d in DIRECTORS},

@@ -56,7 +56,6 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet, material
 from rodfem.core.model import Field
-
 from rodfem.forms.viscoelastic import Maxwell, active
 
 S_HAT = ufl.as_matrix([[0.0, -1.0], [1.0, 0.0]])
@@ -154,7 +153,6 @@ class PlanarBeam:
     """
     supports = {"clamped": ["r", "phi", "v", "omega"], "pinned": ["r", "v"]}
     position = "r"
-    flows = {"force": "v", "moment": "omega"}
     kinematics = {"r": "v", "phi": "omega"}   # configuration -> velocity: what joints act on
     # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {"phi": ("section angle phi (rad, unwrapped): d1 = (cos phi, sin phi)", ()),

@@ -29,7 +29,6 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
-
 from rodfem.forms.cosserat_rod import DIRECTORS, RATES, constraint_rate, director_frame, director_masses, orthonormality
 from rodfem.forms.planar_beam import planar_directors, planar_frame
 
@@ -38,7 +37,6 @@ class PointMass:
     """A point mass m in `dim` dimensions: x, v;  H = 1/2 m |v|^2."""
     point = True
     position = "x"
-    flows = {"force": "v"}
     kinematics = {"x": "v"}
     labels = {"v": ("velocity of the point mass", ("x", "y", "z"))}
     supports = {}
@@ -98,7 +96,6 @@ class PlanarRigidBody:
     attach joints at the centre, or model the body with directors.)"""
     point = True
     position = "x"
-    flows = {"force": "v", "moment": "omega"}
     kinematics = {"x": "v", "phi": "omega"}
     labels = {"phi": ("angle of the body (rad)", ()), "v": ("velocity of the centre of mass", ("x", "y")),
               "omega": ("angular velocity d_t phi", ())}
@@ -157,7 +154,6 @@ class RigidBody:
     the directors (d1, d2, d3) through the centre of mass."""
     point = True
     position = "x"
-    flows = {"force": "v", "moment": "w1"}    # a moment needs a pairing (cosserat_rod.spatial_moment)
     kinematics = {"x": "v", "d1": "w1", "d2": "w2", "d3": "w3"}
     labels = {**{d: (f"director {d} (principal axis of inertia)", ("x", "y", "z")) for d in DIRECTORS},
               "v": ("velocity of the centre of mass", ("x", "y", "z")),

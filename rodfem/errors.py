@@ -3,15 +3,17 @@
 Exit codes of the command line (README, "Exit codes"):
 
 * 0   completed;
-* 2   bad input or environment (`InputError`: a parameter, ``--out``, the JIT
-      cache, a PETSc option, not enough memory);
-* 3   numerical failure (`rodfem.nls.newton.NewtonFailure`);
+* 2   bad input or environment (`InputError`: a parameter (`ParameterError`), a joint
+      (`ConstraintError`), ``--out``, the JIT cache, a PETSc option, not enough memory);
+* 3   numerical failure (`NewtonFailure`);
 * 130 / 143  interrupted by SIGINT / SIGTERM (`Interrupted`: 128 + signal number).
 
 Under MPI every rank must raise the same error at the same point, or the
 ranks that did not fail wait for ever in their next collective operation:
 `agreed` is the one place where a rank's local failure becomes everyone's.
 """
+import os
+import re
 import signal
 from contextlib import contextmanager
 
@@ -20,6 +22,25 @@ class InputError(ValueError):
     """Bad input or environment (exit code 2); the message is one line naming what is wrong and what is allowed."""
 
     exit_code = 2
+
+
+class ParameterError(InputError):
+    """Bad user input; the message is one line naming the parameter and what is allowed (exit code 2)."""
+
+
+class ConstraintError(ParameterError):
+    """A joint or body that cannot be built: bad input, one line naming it (exit code 2)."""
+
+
+class NewtonFailure(RuntimeError):
+    """Newton did not converge in a time step (exit code 3)."""
+
+    exit_code = 3
+
+    def __init__(self, step, t, residual, iterations, reason):
+        self.step, self.t, self.residual, self.iterations, self.reason = step, t, residual, iterations, reason
+        super().__init__(f"Newton failed at step {step} (t = {t:.6g}): residual {residual:.3e} "
+                         f"after {iterations} iterations ({reason})")
 
 
 class Interrupted(Exception):
@@ -51,3 +72,13 @@ def agreed(comm):
     first = next((m for m in messages if m is not None), None)
     if first is not None:
         raise InputError(first)
+
+
+def petsc_error(error, what):
+    """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
+    what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""
+    lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
+    reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
+    options = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
+    return InputError(f"{what}{options}: {reason}; rodfem's solver options have the prefix -rodfem_, "
+                      f"e.g. -rodfem_snes_max_it 50")

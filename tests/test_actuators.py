@@ -16,10 +16,9 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Load, Problem, Support, run
-from rodfem.app.scene import ParameterError
-
 from rodfem.demos import soft_arm_pneumatic, soft_arm_swing, tendon_arm
 from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
+from rodfem.errors import ParameterError
 from rodfem.forms import actuators as act
 from rodfem.forms.cosserat_rod import CosseratRod
 from rodfem.forms.planar_beam import PlanarBeam, quadratic

@@ -14,10 +14,9 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.app.scene import ParameterError
-
 from rodfem.demos import flying_spaghetti_3d, helix_3d, roll_up_3d, whirling_rod_3d
 from rodfem.demos._rod3d import orthonormality_error
+from rodfem.errors import ParameterError
 from rodfem.forms.cosserat_rod import director_masses
 
 COMM = MPI.COMM_WORLD

@@ -11,8 +11,7 @@ def spaghetti(newton_options=None, **overrides):
     p = scene.values({"t_end": 5.0, **overrides})
     problem = scene.build(p, MPI.COMM_WORLD)
     if newton_options is not None:  # rebuild the Newton solver with other settings
-        from rodfem.nls.newton import Newton
-        problem.newton = Newton(problem.F, problem.J, problem.x1, problem.newton.bcs, options=newton_options)
+        problem.set_newton_options(newton_options)
     return problem, p
 
 
@@ -59,6 +58,7 @@ def test_material_values_are_constants_not_compiled_in(rodfem, tmp_path):
 def test_material_parameter_checks():
     import pytest
     import ufl
+
     from rodfem.forms.planar_beam import quadratic
     with pytest.raises(ValueError, match="parameter EI must be a positive number"):
         quadratic(EA=1.0, GA=1.0, EI=0.0)

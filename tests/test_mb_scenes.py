@@ -15,7 +15,6 @@ from mpi4py import MPI
 
 from rodfem import run
 from rodfem.app.scene import load, scenes
-
 from rodfem.demos._multibody import orthonormality
 
 COMM = MPI.COMM_WORLD

@@ -21,10 +21,10 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Problem
-from rodfem.io.output import OutDir, RunWriter
-from rodfem.app.scene import load
-from rodfem.io.sections import RECTANGLE
 from rodfem.analysis.timeloop import run, steps_for
+from rodfem.app.scene import load
+from rodfem.io.output import OutDir, RunWriter
+from rodfem.io.sections import RECTANGLE
 from rodfem.io.vtk import read_pvd, read_vtp
 
 COMM = MPI.COMM_WORLD

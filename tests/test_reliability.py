@@ -7,7 +7,6 @@ import glob
 import json
 import os
 import re
-import resource
 import shutil
 import signal
 import subprocess
@@ -178,18 +177,18 @@ def test_a_bad_petsc_option_is_one_line(option, words, tmp_path):  # 12
 # -- the API (items 17, 18) ------------------------------------------------------------------------------
 
 def _roll_up(n=4):
-    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     from rodfem import Load, Problem, Support, ramp
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     beam = PlanarBeam(rhoA=0.0, rhoI=0.0, energy=quadratic(EA=1e4, GA=1e4, EI=500.0))
     return Problem(beam, 10.0, n, loads=[Load("omega", ramp(2 * np.pi * 500 / 10, 1.0), "right")],
                    supports=[Support("left", "clamped")], initial={"r": lambda x: np.vstack([x[0], 0 * x[0]])})
 
 
 def test_api_names_the_parameter():  # 17
-    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     from rodfem import InputError, Problem
     from rodfem.app.driver import run_scene
-    from rodfem.app.scene import ParameterError
+    from rodfem.errors import ParameterError
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
     with pytest.raises(ParameterError, match="'n_elements' must be an integer"):
         run_scene("roll-up-2d", {"n_elements": 2.5})
     with pytest.raises(ValueError, match="rhoA must be a number >= 0"):

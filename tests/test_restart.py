@@ -12,7 +12,6 @@ import time
 
 import numpy as np
 import pytest
-
 from conftest import BIN, REPO
 
 from rodfem.app.cli import main
@@ -82,8 +81,8 @@ def test_a_killed_run_resumes_from_its_last_checkpoint(tmp_path):
 @pytest.mark.mpi
 def test_mpi_resume_and_two_ranks_to_one(rodfem, tmp_path):
     """mpirun -n 2: a resumed run equals the uninterrupted one bit by bit (a mechanism: the joints'
-    rows come from rank 0; SuperLU on every rank, MUMPS is not reproducible); the 2-rank
-    checkpoint continued on 1 process agrees to 1e-12."""
+    rows come from rank 0), with the parallel solver of a run without checkpoints (reported in
+    summary.json); the 2-rank checkpoint continued on 1 process agrees to 1e-12."""
     sets = ["--set", "checkpoint_every=4", "--set", "n_elements=4"]
     full, part = str(tmp_path / "full"), str(tmp_path / "part")
     ok(rodfem("run", "four-bar-2d", *sets, "--set", "t_end=0.4", "--quiet", "--out", full, np=2))
@@ -92,6 +91,8 @@ def test_mpi_resume_and_two_ranks_to_one(rodfem, tmp_path):
     shutil.copytree(part, serial)
     ok(rodfem("run", "--resume", part, "--set", "t_end=0.4", "--quiet", np=2))
     assert same_file(full, part)
+    with open(os.path.join(part, "summary.json")) as f:
+        assert json.load(f)["linear_solver"].startswith("schur")
     ok(rodfem("run", "--resume", serial, "--set", "t_end=0.4", "--quiet"))
     a, b = history(full), history(serial)
     for k in a:

@@ -23,8 +23,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem import run
-from rodfem.la.schur import InterfaceSchur, interface
 from rodfem.app.scene import load
+from rodfem.la.schur import InterfaceSchur, interface
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BIN = os.path.dirname(sys.executable)
@@ -133,7 +133,7 @@ def test_fast_assembly_is_dolfinx_assembly():
     for scene, n in (("cantilever-2d", 12), ("flying-spaghetti-3d", 6)):
         problem = built(scene, n, steps=1)
         nw = problem.newton
-        assert nw.assembler.fast is not None
+        assert nw.assembler.blocks[0].fast is not None
         nw.assembler.jacobian(nw.xv, nw.A)
         B = fpetsc.create_matrix(problem.J)
         fpetsc.assemble_matrix(B, problem.J, bcs=nw.bcs)
@@ -149,11 +149,12 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     """An entry that is zero at the initial and the random states (a conditional that holds only
     for w > 1e6) but not later: the pattern grows by it, and the matrix is still DOLFINx's."""
     import ufl
-    from dolfinx import fem, mesh as dmesh
+    from dolfinx import fem
+    from dolfinx import mesh as dmesh
     from dolfinx.fem import petsc as fpetsc
 
     from rodfem.fem import compat
-    from rodfem.fem.fastassembly import FastJacobian
+    from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock
     mesh = dmesh.create_interval(MPI.COMM_WORLD, 8, [0.0, 1.0])
     P1 = ufl.FiniteElement("P", mesh.ufl_cell(), 1)
     V = fem.FunctionSpace(mesh, ufl.MixedElement([P1] * 4))
@@ -161,11 +162,14 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     w = fem.Function(fem.FunctionSpace(mesh, P1))
     a = sum(u[i] * v[i] for i in range(4)) * ufl.dx + ufl.conditional(ufl.gt(w, 1e6), w, 0.0) * u[1] * v[0] * ufl.dx
     J = compat.form(a)
-    fast = FastJacobian(J, [])
-    A = fast.create_matrix()
+    x = fem.Function(V)
+    F = compat.form(sum(x[i] * v[i] for i in range(4)) * ufl.dx)
+    assembler = BlockAssembler(BlockLayout(mesh.comm, [V]), [BodyBlock(F, J, x, [])])
+    assert assembler.blocks[0].fast is not None
+    A = assembler.create_matrix()
     before = A.getInfo()["nz_used"]
     w.x.array[:] = 1e7
-    fast.assemble(A)
+    assembler.jacobian(assembler.vector, A)
     B = fpetsc.create_matrix(J)
     fpetsc.assemble_matrix(B, J)
     B.assemble()
@@ -173,7 +177,7 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     C.axpy(-1.0, A, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     assert C.norm() == 0.0 and B.norm() > 1e6
     assert A.getInfo()["nz_used"] > before   # the coupling u_1 -> v_0 was inserted
-    fast.assemble(A)                          # and the next assembly uses the grown pattern
+    assembler.jacobian(assembler.vector, A)   # and the next assembly uses the grown pattern
     C = B.copy()
     C.axpy(-1.0, A, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     assert C.norm() == 0.0
@@ -182,11 +186,12 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
 def test_linear_time_collapse_is_dolfinx_collapse():
     """StateSpace.collapse (built from the field's element, linear in n) puts every field where
     DOLFINx's quadratic collapse does: the same dofs of W, the same interpolated values."""
-    from dolfinx import fem, mesh as dmesh
+    from dolfinx import fem
+    from dolfinx import mesh as dmesh
 
+    from rodfem.core.spaces import StateSpace
     from rodfem.forms.cosserat_rod import CosseratRod
     from rodfem.forms.planar_beam import PlanarBeam, quadratic
-    from rodfem.core.spaces import StateSpace
     for model in (PlanarBeam(1.0, 1.0, quadratic(1.0, 1.0, 1.0), degree=2),
                   CosseratRod(1.0, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0])):
         S = StateSpace(dmesh.create_interval(MPI.COMM_WORLD, 17, [0.0, 2.0]), model.fields)

@@ -16,10 +16,10 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import run
-from rodfem.core.joints import ConstraintError, Frame, Joint, Point, ground
-
+from rodfem.core.joints import Frame, Joint, Point, ground
 from rodfem.demos import _slider_crank_reference as exact
 from rodfem.demos import slider_crank_3d
+from rodfem.errors import ConstraintError
 from rodfem.forms import joints
 
 T_END = 1.0       # about 1.7 crank revolutions

@@ -10,10 +10,9 @@ import pytest
 from mpi4py import MPI
 
 from rodfem import Load, Support, System, ramp, run
+from rodfem.analysis.statics import Statics, solve
 from rodfem.app.cli import main
 from rodfem.app.scene import load
-from rodfem.analysis.statics import Statics, solve
-
 from rodfem.forms import joints
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 

@@ -10,18 +10,17 @@ import ufl
 from mpi4py import MPI
 from ufl.algorithms import expand_derivatives
 
-from rodfem import Load, NewtonFailure, Problem, Support, run
+from rodfem import Load, Problem, Support, run
 from rodfem.app.driver import run_scene
-from rodfem.app.scene import ParameterError
-
-from rodfem.forms.string import String
 from rodfem.core.integrators import Step
-from rodfem.forms.string_materials import MATERIALS, biot, kirchhoff, logarithmic, tension_only
 
 # the scenes by import (the CLI finds them through the entry points in pyproject.toml)
 from rodfem.demos.crane_manoeuvre import scene as crane  # noqa: E402
 from rodfem.demos.hanging_cable import scene as hanging  # noqa: E402
 from rodfem.demos.taut_string_wave import scene as wave  # noqa: E402
+from rodfem.errors import ParameterError
+from rodfem.forms.string import String
+from rodfem.forms.string_materials import MATERIALS, biot, kirchhoff, logarithmic, tension_only
 
 SCENES = {s.name: s for s in (hanging, crane, wave)}
 

@@ -5,9 +5,9 @@ import json
 import pytest
 
 from rodfem.app.cli import main
-from rodfem.analysis.study import run_study
+from rodfem.app.study import run_study
 
-# The documented header of study.csv, written out here (not imported from rodfem.analysis.study): a column
+# The documented header of study.csv, written out here (not imported from rodfem.app.study): a column
 # dropped, renamed or moved breaks the readers of the file, and this test.
 HEADER = ["path", "n_elements", "dt", "integrator", "steps", "status", "error", "error_max_t", "self_error",
           "wall_time_s", "newton_its_mean", "newton_its_max", "max_balance_error", "max_balance_error_relative",

@@ -9,10 +9,10 @@ import pytest
 
 from rodfem import Load, Problem, Support, run
 from rodfem.app.driver import run_scene
+from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod, planar_beam, string
 from rodfem.forms.string_materials import kirchhoff, logarithmic
 from rodfem.forms.viscoelastic import midpoint_factor, sls_creep, sls_relaxation
-from rodfem.demos._rod3d import NEWTON, end_moment, straight
 
 RULES = ("midpoint", "discrete-gradient")
 

@@ -57,9 +57,9 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 
-from rodfem.core.problem import compile_forms
-from rodfem.app.scene import ParameterError
-from rodfem.analysis.statics import RestStep, bodies_of, rest_form
+from rodfem.analysis.statics import RestStep, rest_form
+from rodfem.errors import ParameterError
+from rodfem.fem.jit import compile_forms
 
 DENSE_MAX = 1500
 
@@ -123,18 +123,16 @@ class Linearization:
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
         self.problem = problem
-        self.system = isinstance(getattr(problem, "bodies", None), dict)
-        if self.system:
-            problem.build()
-        bodies = bodies_of(problem)
+        self.system = problem.named_bodies
+        problem.build()
+        bodies = problem.body_items()
         parts = []
         for name, body in bodies:
             ref = reference.get(name) if isinstance(reference, dict) else reference
             parts.append(self._body(name, body, ref if ref is not None else body.state0))
         self.X = parts[0]["X"] if not self.system else None
         sizes = [p["n"] for p in parts]
-        n_lam = problem.lam_space.dofmap.index_map.size_local * problem.lam_space.dofmap.index_map_bs \
-            if self.system and problem.lam_space is not None else 0
+        n_lam = problem.layout.n_multipliers
         full = {}
         for k in ("E", "A", "Em", "Am", "Hess"):
             blocks = [p[k] for p in parts] + ([sp.csr_matrix((n_lam, n_lam))] if n_lam else [])
@@ -207,13 +205,12 @@ class Linearization:
 
     def _joints(self, full, f0):
         """The joints' rows and reactions at the System's state (serial: block indices = global)."""
-        A = self.problem.assembler
-        x = A.X0.getArray(readonly=True)
+        x = self.problem.X0.getArray(readonly=True)
         for j in self.problem.joints:
             q, v, lam = x[j.q_index], x[j.v_index], x[j.lam_index]
             G = np.einsum("kij,j->ki", j.Q, q) + j.c
             g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e
-            fixed = A.fixed
+            fixed = self.problem.points.fixed
             rows = [k for k, i in enumerate(j.v_index) if int(i) not in fixed]
             vi, qi, li = j.v_index, j.q_index, j.lam_index
             lamQ = np.einsum("k,kij->ij", lam, j.Q)
@@ -506,81 +503,3 @@ def plot_modes(path, bodies, shapes, omega, amplitude=None):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
-
-
-# -- a scene's linear model and modes (rodfem linearize / rodfem modes) -------------------------
-
-ABOUT = ("static", "initial")
-
-
-def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=1):
-    """Build `scene` and put it in the state to linearize about: its static equilibrium under the
-    inputs at time t ('static', the default) or its initial state with the inputs at t
-    ('initial'; not an equilibrium in general: then f0 != 0).  Returns (scene, p, Linearization)."""
-    from rodfem.app.scene import Scene, load
-    from rodfem.analysis.statics import Statics
-    comm = comm or MPI.COMM_WORLD
-    if about not in ABOUT:
-        raise ParameterError(f"--about must be one of {', '.join(ABOUT)} (got {about!r})")
-    if comm.size > 1:
-        raise ParameterError("linearize and modes run on one process (no mpirun)")
-    if not isinstance(scene, Scene):
-        scene = load(scene)
-    p = scene.values(overrides)
-    problem = scene.build(p, comm)
-    system = isinstance(getattr(problem, "bodies", None), dict)
-    ref = None
-    if about == "static":
-        statics = Statics(problem)
-        statics.solve(t, load_steps)
-        ref = statics.refs if system else statics.refs[""]
-    else:
-        for load in problem.loads:
-            load.update(t)
-    return scene, p, Linearization(problem, reference=ref)
-
-
-def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
-    """`rodfem linearize`: the matrices into `out`; returns the linear.json content."""
-    import time
-    t0 = time.perf_counter()
-    scene, p, lin = prepare(scene, overrides, about, t)
-    from rodfem import __version__
-    extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
-             "wall_time_s": time.perf_counter() - t0, "form": "E dx' = (J - R) Q dx + B du, dy = B^T Q dx "
-             "(= C dx); A = (J - R) Q; Hess: Hessian of H; E_modes, A_modes: the total-form pencil of modes"}
-    return lin.write(out, extra) if out else extra
-
-
-def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, solver="auto"):
-    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info)."""
-    import json
-    import os
-    import time
-    if count < 1:
-        raise ParameterError(f"--count must be an integer >= 1 (got {count})")
-    t0 = time.perf_counter()
-    scene, p, lin = prepare(scene, overrides, about, t)
-    omega, vectors, used = natural_modes(lin, count, solver)
-    info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
-            "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
-            "damping_ratio": [float(z) for z in lin.damping],
-            "parameters": p, "wall_time_s": time.perf_counter() - t0}
-    if out:
-        os.makedirs(out, exist_ok=True)
-        with open(os.path.join(out, "modes.csv"), "w") as fh:
-            fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio\n")
-            for k, w in enumerate(omega):
-                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r},{lin.damping[k]!r}\n")
-        with open(os.path.join(out, "modes.json"), "w") as fh:
-            json.dump(info, fh, indent=2, default=float)
-        if len(omega):
-            bodies, shapes = mode_shapes(lin, vectors)
-            plot_modes(os.path.join(out, "modes.png"), bodies, shapes[: min(len(shapes), 4)], omega)
-            arrays = {"omega": omega, "damping_ratio": lin.damping}
-            for b, (name, s, ref) in enumerate(bodies):
-                key = name or "body"
-                arrays[f"{key}.s"], arrays[f"{key}.reference"] = s, ref
-                arrays[f"{key}.shapes"] = np.array([mode[b] for mode in shapes])
-            np.savez(os.path.join(out, "mode_shapes.npz"), **arrays)
-    return omega, info

@@ -39,12 +39,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import ufl
 from dolfinx import fem
-from petsc4py import PETSc
 
 from rodfem.core.integrators import Step, _flatten, _unflatten
-from rodfem.nls.newton import Newton, NewtonFailure
-from rodfem.core.problem import compile_forms
-from rodfem.app.scene import ParameterError
+from rodfem.core.system import JointRows
+from rodfem.errors import NewtonFailure, ParameterError
+from rodfem.fem.assembly import BlockAssembler, BodyBlock
+from rodfem.fem.jit import compile_forms
+from rodfem.nls.newton import Newton
 
 # full Newton (no chord: the 3D scenes' lagged Jacobian is for time steps), own option prefix
 OPTIONS = {"snes_max_it": 30}
@@ -120,12 +121,6 @@ def rest_form(body, x, ref, rates=None, total=True, loads=True):
     return _drop_zero(F)
 
 
-def bodies_of(target):
-    """[(name, body)] of a System, or [("", problem)]."""
-    refs = getattr(target, "bodies", None)
-    return [(n, r.body) for n, r in refs.items()] if isinstance(refs, dict) else [("", target)]
-
-
 @dataclass
 class LoadStep:
     mu: float
@@ -153,11 +148,8 @@ class Statics:
     """
 
     def __init__(self, target, options=None):
-        self.target = target
-        self.system = isinstance(getattr(target, "bodies", None), dict)
-        if self.system:
-            target.build()
-        self.bodies = bodies_of(target)
+        self.target = target.build()
+        self.bodies = target.body_items()
         self.refs = {}
         forms = {}
         for name, body in self.bodies:
@@ -166,42 +158,27 @@ class Statics:
             self.refs[name] = ref
             F = rest_form(body, body.x1, ref)
             forms[(name, "F")], forms[(name, "J")] = F, ufl.derivative(F, body.x1)
-        if self.system and target.lam_space is not None:
-            dl = ufl.TestFunction(target.lam_space)
-            zero = fem.Constant(target.lam_space.mesh, 0.0)
-            F = zero * ufl.inner(target.lam, dl) * ufl.dx
-            forms[("joints", "F")], forms[("joints", "J")] = F, ufl.derivative(F, target.lam)
         compiled = compile_forms(forms)
-        opts = dict(OPTIONS, **(options or {}))
-        if self.system:
-            # A second BlockAssembler indexes the joints again (new, equal index arrays on each
-            # joint); the System's own assembler caches positions by id() of the old arrays, so
-            # they are put back: freed arrays' ids could be reused and hit that cache.
-            kept = [(j.q_index, j.v_index, j.lam_index) for j in target.joints]
-            self.assembler = StaticBlockAssembler(target, compiled)
-            for j, (q, v, lam) in zip(target.joints, kept):
-                j.q_index, j.v_index, j.lam_index = q, v, lam
-            self.newton = Newton(assembler=self.assembler, options=opts, prefix=PREFIX)
-            self.unknown = self.assembler.X1
-        else:
-            self.newton = Newton(compiled[("", "F")], compiled[("", "J")], target.x1, target.bcs,
-                                 options=opts, prefix=PREFIX)
-            self.unknown = self.newton.xv
+        blocks = [BodyBlock(compiled[(name, "F")], compiled[(name, "J")], body.x1, body.bcs)
+                  for name, body in self.bodies]
+        self.joint_rows = StaticJointRows(target.points) if target.joints else None
+        self.assembler = BlockAssembler(target.layout, blocks, self.joint_rows)
+        self.newton = Newton(assembler=self.assembler, options=dict(OPTIONS, **(options or {})), prefix=PREFIX)
+        self.unknown = self.assembler.vector
 
     # -- the inputs at load factor mu ------------------------------------------------
     def set_load(self, mu, t):
         for _, body in self.bodies:
             for load in body.loads:
                 load.constant.value = mu * np.asarray(load.value(t), dtype=float)
-        if self.system:
-            self.assembler.mu, self.assembler.t = mu, t
+        if self.joint_rows is not None:
+            self.joint_rows.mu, self.joint_rows.t = mu, t
 
     def _get(self):
         return self.unknown.getArray(readonly=True).copy()
 
     def _set(self, values):
         self.unknown.getArray()[:] = values
-        self.unknown.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
 
     # -- Newton with load continuation ------------------------------------------------
     def solve(self, t=0.0, steps=1, adaptive=True, min_step=1e-5):
@@ -209,11 +186,8 @@ class Statics:
         (fixed if not `adaptive`).  The solution is left as x_n (and x_{n+1}) of the problem,
         at rest.  Returns a StaticResult; raises StaticFailure."""
         res = StaticResult(t=t)
-        if self.system:
-            dyn = self.target.assembler
-            self._set(dyn.X0.getArray(readonly=True))
-        else:
-            self.target.x1.x.array[:] = self.target.x0.x.array
+        self.target.predict(None)          # x_n from the bodies
+        self._set(self.target.X0.getArray(readonly=True))
         mu, dmu = 0.0, 1.0 / max(int(steps), 1)
         x_cur, x_prev, mu_prev = self._get(), None, None
         last = (0, float("nan"), "")
@@ -256,17 +230,7 @@ class Statics:
 
     def _commit(self):
         """x_n = x_{n+1} = the equilibrium (the time loop starts from it)."""
-        if self.system:
-            self.assembler.update(self.unknown)
-            dyn = self.target.assembler
-            self.unknown.copy(dyn.X1)
-            self.unknown.copy(dyn.X0)
-            dyn.push(dyn.X1, "x1")
-            dyn.push(dyn.X0, "x0")
-        else:
-            x = self.target
-            x.x1.x.scatter_forward()
-            x.x0.x.array[:] = x.x1.x.array
+        self.target.set_state(self.unknown)
 
 
 def solve(target, t=0.0, steps=1, adaptive=True, options=None):
@@ -276,137 +240,27 @@ def solve(target, t=0.0, steps=1, adaptive=True, options=None):
     return statics, statics.solve(t, steps, adaptive)
 
 
-def _add(A, rows, cols, values):
-    A.setValues(np.asarray(rows, dtype=PETSc.IntType), np.asarray(cols, dtype=PETSc.IntType),
-                np.ascontiguousarray(values, dtype=PETSc.ScalarType), addv=PETSc.InsertMode.ADD)
-
-
-def _import_block():
-    from rodfem.core.system import BlockAssembler
-    return BlockAssembler
-
-
-class StaticBlockAssembler(_import_block()):
-    """The System's block residual at rest: the bodies' static forms, and per joint the reactions
-    G(q)^T lambda on the momentum rows and the position-level rows g(q) - mu g_p(t)."""
+class StaticJointRows(JointRows):
+    """The joints at rest: the reactions G(q)^T lambda on the momentum rows and the position-level
+    rows g(q) - mu g_p(t) (the load factor mu scales a driven joint's motion)."""
     mu, t = 1.0, 0.0
 
-    def _static_terms(self):
-        vals = self._values(self.X1)
-        if self.comm.rank != 0:
-            return []
+    def entries(self):
         out = []
         for j in self.joints:
-            q, lam = self._pick(vals, j.q_index), self._pick(vals, j.lam_index)
-            G = np.einsum("kij,j->ki", j.Q, q) + j.c
-            g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e - self.mu * j.prescribed(self.t)
-            out.append((j, G.T @ lam, g, np.einsum("k,kij->ij", lam, j.Q), G))
+            v, q, lam = j.v_index[j.rows], j.q_index[j.qcols], j.lam_index
+            for r, c in ((v, q), (v, lam), (lam, q)):
+                R, C = np.meshgrid(r, c, indexing="ij")
+                out.append((R.ravel(), C.ravel()))
         return out
 
-    def residual(self, xin, b):
-        from dolfinx.fem import petsc as fpetsc
-        self.update(xin)
-        with b.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector_block(b, self.F, self.J, bcs=self.bcs, x0=self.X1, scale=-1.0)
-        for j, r_v, r_lam, _, _ in self._static_terms():
-            keep = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]
-            b.setValues(j.v_index[keep].astype(PETSc.IntType), np.ascontiguousarray(r_v[keep]), addv=PETSc.InsertMode.ADD)
-            b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
-        b.assemblyBegin()
-        b.assemblyEnd()
-        self.joint_work = 0.0
-
-    def jacobian(self, xin, A):
-        from dolfinx.fem import petsc as fpetsc
-        A.zeroEntries()
-        fpetsc.assemble_matrix_block(A, self.J, bcs=self.bcs)
-        A.assemble(PETSc.Mat.AssemblyType.FLUSH)
-        for j, _, _, drv_dq, G in self._static_terms():
-            rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]
-            qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
-            lam = list(range(j.size))
-            if rows and qcols:
-                _add(A, j.v_index[rows], j.q_index[qcols], drv_dq[np.ix_(rows, qcols)])
-            if rows:
-                _add(A, j.v_index[rows], j.lam_index, G.T[rows, :])
-            if qcols:
-                _add(A, j.lam_index, j.q_index[qcols], G[np.ix_(lam, qcols)])
-        A.assemble()
-
-
-# -- a scene's equilibrium, from the command line (rodfem static SCENE) -----------------------
-
-def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, comm=None):
-    """The static equilibrium of `scene` under its inputs at time t (default: t_end, the full load).
-
-    Writes into `out` (if given): summary.json (load steps, Newton iterations, the observables
-    at equilibrium and, for scenes with an exact solution, the error against it), loadsteps.csv
-    (mu, Newton iterations, residual per load step), centreline.pvd (the initial and the
-    equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as the state at step 0,
-    from which ``rodfem run --resume out`` starts a dynamic run (at rest, pre-stressed).
-    Returns (problem, StaticResult, summary)."""
-    import os
-    import time
-    from contextlib import nullcontext
-
-    from mpi4py import MPI
-
-    from rodfem import __version__
-    from rodfem.io import checkpoint
-    from rodfem.io.output import OutDir, RunWriter, plot_shapes, write_json
-    from rodfem.app.scene import Scene, load
-
-    comm = comm or MPI.COMM_WORLD
-    if not isinstance(scene, Scene):
-        scene = load(scene)
-    p = scene.values(overrides)
-    t = p["t_end"] if t is None else float(t)
-    if steps < 1:
-        raise ParameterError(f"--load-steps must be an integer >= 1 (got {steps})")
-    outdir = OutDir(out, comm) if out else None
-    started = {"scene": scene.name, "mode": "static", "status": "running", "parameters": p, "t": t,
-               "mpi_ranks": comm.size, "pid": os.getpid()}
-    with outdir.claimed(started) if outdir else nullcontext():
-        problem = scene.build(p, comm)
-        writer = RunWriter(outdir, problem, 1, 2, p.get("section", 0.0)) if outdir else None
-        if writer:
-            writer.frame(0.0)
-        t0 = time.perf_counter()
-        statics = Statics(problem)
-        try:
-            result = statics.solve(t, steps, adaptive)
-        except StaticFailure as fail:
-            if outdir:
-                outdir.do("write summary.json", write_json, outdir.file("summary.json"),
-                          dict(started, status="static-failure", failure=str(fail)))
-            raise
-        wall = time.perf_counter() - t0
-        obs = problem.observe()
-        summary = {"scene": scene.name, "mode": "static", "status": "completed", "rodfem_version": __version__,
-                   "parameters": p, "t": t, "load_steps": len(result.steps), "load_steps_halved": result.failed,
-                   "initial_load_steps": steps, "adaptive": adaptive, "newton_its": result.newton_its,
-                   "wall_time_s": wall, "dofs": problem.dofs, "n_elements": problem.n_elements,
-                   "mpi_ranks": comm.size, "equilibrium": obs}
-        ref = scene.reference(p) if scene.reference and t == p["t_end"] else None
-        if ref:
-            scale = ref.get("scale", 1.0)
-            errs = {k: abs(obs[k] - v) for k, v in ref.items() if k != "scale" and k in obs}
-            summary["reference"] = ref
-            summary["error"] = max(errs.values()) if errs else None
-            summary["error_relative"] = summary["error"] / scale if errs else None
-        if outdir:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
-            checkpoint.save(outdir, problem, checkpoint._Layout(problem), 0, None, problem.hamiltonian(), 0.0,
-                            {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
-            writer.frame(1.0)
-
-            def write_loadsteps(path):
-                with open(path, "w") as f:
-                    f.write("mu,newton_its,residual\n")
-                    for s in result.steps:
-                        f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
-            outdir.do("write loadsteps.csv", write_loadsteps, outdir.file("loadsteps.csv"))
-            outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
-            outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots,
-                      writer.dim, writer.width)
-    return problem, result, summary
+    def update(self, X):
+        vals = self.points.values(X)
+        self._terms = []
+        if self.comm.rank == 0:
+            for j in self.joints:
+                q, lam = vals[j.q_at], vals[j.lam_at]
+                G = np.einsum("kij,j->ki", j.Q, q) + j.c
+                g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e - self.mu * j.prescribed(self.t)
+                blocks = (("v", "q", np.einsum("k,kij->ij", lam, j.Q)), ("v", "lam", G.T), ("lam", "q", G))
+                self._terms.append((j, G.T @ lam, g, blocks, 0.0))

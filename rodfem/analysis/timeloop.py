@@ -6,10 +6,10 @@ h d_n >= 0 is the energy dissipated in the step (0 for a conservative model);
 only a dissipating problem (`problem.dissipates`) has the column `dissipated`
 (the sum of h d_n so far).
 
-A problem, as the loop sees it: `t` (the time of its state x_n, advanced by
-the loop), `h` (the step, a fem.Constant), `comm`, `set_time(t)`,
-`predict(previous)`, `solve(step, t)`, `accept()`, `hamiltonian()`,
-`supplied_work()` and `observe()` (see rodfem/core/problem.py).
+What the loop asks of a system (rodfem/core/model.py, `SteppedSystem`; rodfem/core/system.py
+is the one implementation): `t` (the time of its state x_n, advanced by the loop), `comm`,
+`set_step(h)`, `set_time(t)`, `predict(previous)`, `solve(step, t)`, `accept()`,
+`hamiltonian()`, `supplied_work()`, `dissipates`, `dissipated_energy()` and `observe()`.
 """
 import math
 import time
@@ -19,7 +19,7 @@ import numpy as np
 
 from rodfem.common import interrupts
 from rodfem.common.limits import check_steps
-from rodfem.nls.newton import NewtonFailure
+from rodfem.errors import NewtonFailure
 
 
 @dataclass
@@ -77,7 +77,7 @@ def run(problem, dt, t_end, writer=None, progress=False, result=None, start=None
         raise ValueError(f"t_end = {t_end:g} is not after the problem's time t = {t_start:g} "
                          f"(run continues from where the last run stopped)")
     n_steps = steps_for(dt, t_end - t_start)
-    problem.h.value = dt
+    problem.set_step(dt)
     res = result if result is not None else Result()
     dissipates = getattr(problem, "dissipates", False)
     first = 0

@@ -16,10 +16,9 @@ import traceback
 
 from mpi4py import MPI
 
+from rodfem.app.scene import load, scenes
 from rodfem.common import interrupts
-from rodfem.errors import InputError, Interrupted
-from rodfem.nls.newton import NewtonFailure
-from rodfem.app.scene import ParameterError, load, scenes
+from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
 
 comm = MPI.COMM_WORLD
 
@@ -86,13 +85,13 @@ def cmd_run(args):
 
 
 def cmd_study(args):
-    from rodfem.analysis.study import run_study
+    from rodfem.app.study import run_study
     run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
 
 
 def cmd_static(args):
     """rodfem static SCENE: the equilibrium of the discrete model under the loads at t (default t_end)."""
-    from rodfem.analysis.statics import run_static
+    from rodfem.app.analyses import run_static
     out = args.out or os.path.join("results", args.scene + "-static")
     _, result, summary = run_static(args.scene, parse_sets(args.set), out=out, t=args.time,
                                     steps=args.load_steps, adaptive=not args.fixed_steps)
@@ -107,7 +106,7 @@ def cmd_static(args):
 
 def cmd_linearize(args):
     """rodfem linearize SCENE --out DIR: E, J, R, Q, B, C (.npz, .mat) about an equilibrium or the initial state."""
-    from rodfem.analysis.linearize import run_linearize
+    from rodfem.app.analyses import run_linearize
     out = args.out or os.path.join("results", args.scene + "-linear")
     info = run_linearize(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time)
     c = info["checks"]
@@ -120,7 +119,7 @@ def cmd_linearize(args):
 
 def cmd_modes(args):
     """rodfem modes SCENE: natural frequencies and mode shapes of the linearized model."""
-    from rodfem.analysis.linearize import run_modes
+    from rodfem.app.analyses import run_modes
     out = args.out or os.path.join("results", args.scene + "-modes")
     omega, info = run_modes(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time,
                             count=args.count, solver=args.solver)
@@ -173,7 +172,8 @@ def add_static_parsers(sub):
         lp = sub.add_parser(name, help=what)
         lp.add_argument("scene")
         lp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
-        lp.add_argument("--out", metavar="DIR", help=f"output directory (default results/SCENE-{'linear' if name == 'linearize' else 'modes'})")
+        default = f"results/SCENE-{'linear' if name == 'linearize' else 'modes'}"
+        lp.add_argument("--out", metavar="DIR", help=f"output directory (default {default})")
         lp.add_argument("--about", default="static", choices=("static", "initial"),
                         help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
         lp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")

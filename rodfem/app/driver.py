@@ -5,12 +5,11 @@ from contextlib import nullcontext, suppress
 
 from mpi4py import MPI
 
-from rodfem.common import interrupts
-from rodfem.errors import InputError, Interrupted
-from rodfem.nls.newton import NewtonFailure
-from rodfem.io.output import OutDir, RunWriter, summarize, write_json
-from rodfem.app.scene import ParameterError, Scene, load
 from rodfem.analysis.timeloop import Result, run, steps_for
+from rodfem.app.scene import Scene, load
+from rodfem.common import interrupts
+from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
+from rodfem.io.output import OutDir, RunWriter, summarize, write_json
 
 STOPS = (NewtonFailure, Interrupted, InputError)
 

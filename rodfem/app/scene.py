@@ -12,12 +12,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Callable, Optional
 
-from rodfem.errors import InputError
 from rodfem.core.integrators import RULES
-
-
-class ParameterError(InputError):
-    """Bad user input; the message is one line naming the parameter and what is allowed (exit code 2)."""
+from rodfem.errors import ParameterError
 
 
 @dataclass

@@ -13,14 +13,15 @@ the tip only if the end s = L is free (else the mean position
 """
 import numpy as np
 import ufl
-from dolfinx import fem, mesh as dmesh
+from dolfinx import fem
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from rodfem.core.integrators import Step
-from rodfem.fem.jit import compiles
 from rodfem.common.limits import check_elements
+from rodfem.core.integrators import Step
 from rodfem.core.ports import ENDS
 from rodfem.core.spaces import StateSpace, dofs_per_element
+from rodfem.fem.jit import compiles
 
 
 class Body:

@@ -28,7 +28,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from rodfem.app.scene import ParameterError
+from rodfem.errors import ConstraintError
 
 
 @dataclass
@@ -75,10 +75,6 @@ def ground(x=(), R=None):
 
 
 GROUND = ground()   # the world frame at the origin
-
-
-class ConstraintError(ParameterError):
-    """A joint that cannot be built: bad input, one line naming the joint (the CLI exits with 2)."""
 
 
 def quadratic_form(g, n, scale=1.0):

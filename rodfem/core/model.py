@@ -19,7 +19,6 @@ A model is any object with
                  used to start the strains consistent with the initial shape
 ``momentum(x)``  dict column -> density of momentum maps (p_x, ..., L_z),
                  written for unsupported bodies; may be empty
-``flows``        dict load-kind -> flow field, e.g. {"force": "v", "moment": "omega"}
 
 Optional, for a model with dissipation (E x' = (J - R) z + B u, R >= 0):
 
@@ -42,5 +41,67 @@ Optional, for what a run writes (rodfem/io/snapshot.py, rodfem/io/frames.py):
 ``massless``     True when the model has no inertia: its velocities (the values of
                  ``kinematics``) are not written
 ``box()``        a rigid body's edge lengths (a1, a2, a3) along (d1, d2, d3), for pictures
+
+`Model` and `SteppedSystem` below state these contracts as `typing.Protocol`s (checked by
+type checkers, not at run time).
 """
+from typing import Protocol, runtime_checkable
+
 from rodfem.core.spaces import Field  # noqa: F401
+
+
+@runtime_checkable
+class Model(Protocol):
+    """What the engine asks of a model (see the module docstring)."""
+
+    fields: list
+    supports: dict
+    position: str
+    quadrature_degree: int
+
+    def hamiltonian(self, x, dx, ds):
+        """H(x) as a UFL form."""
+
+    def residual(self, step, test, dx, ds):
+        """The weak form of E (x_{n+1} - x_n)/h - J(x_{n+1/2}) z (no loads)."""
+
+    def compatible_strains(self, x) -> dict:
+        """Strain field -> UFL expression of the configuration."""
+
+    def momentum(self, x) -> dict:
+        """History column -> density of a momentum map."""
+
+
+@runtime_checkable
+class SteppedSystem(Protocol):
+    """What the time loop (rodfem/analysis/timeloop.py) asks of a system (rodfem.System)."""
+
+    t: float
+    comm: object
+
+    def set_step(self, h: float) -> None:
+        """The step h of the following steps."""
+
+    def set_time(self, t: float) -> None:
+        """The inputs u(t) of the next step (t = t_{n+1/2})."""
+
+    def predict(self, previous) -> None:
+        """Newton's start from x_n (and x_{n-1}, if not None)."""
+
+    def solve(self, step: int, t: float):
+        """x_{n+1} at time t (raises NewtonFailure)."""
+
+    def accept(self):
+        """x_n <- x_{n+1}; returns the old x_n."""
+
+    def hamiltonian(self) -> float:
+        """H(x_{n+1})."""
+
+    def supplied_work(self) -> float:
+        """h y.u of the last step."""
+
+    def dissipated_energy(self) -> float:
+        """h d_n >= 0 of the last step."""
+
+    def observe(self) -> dict:
+        """The history's columns of x_{n+1}."""

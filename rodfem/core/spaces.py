@@ -10,8 +10,8 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from rodfem.fem import compat
 from rodfem.errors import InputError
+from rodfem.fem import compat
 
 
 @dataclass(frozen=True)

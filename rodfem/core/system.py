@@ -1,4 +1,4 @@
-"""A mechanism: bodies joined by joints into one port-Hamiltonian system, one Newton per step.
+"""A port-Hamiltonian system of bodies, joined by joints, one Newton per step.
 
     four_bar = System()
     crank   = four_bar.add("crank",   beam, length, n_elements=10, initial=..., supports=[...])
@@ -7,29 +7,34 @@
     four_bar.marker("marker", coupler.at(0.5 * length))
     run(four_bar, dt, t_end)
 
-Each body keeps its own mesh, state space, forms and loads (rodfem/core/body.py);
-a joint (rodfem/core/joints.py, physics in forms/joints.py) couples
-points of two bodies through its multipliers.  The unknown of a step is the
-block vector (x_1, ..., x_k, lambda) of all bodies and all joints' multipliers;
-the residual is the bodies' residuals (assembled by DOLFINx into their
-blocks) plus the joints' reactions and constraint rows; the Jacobian is one
-PETSc matrix.  H = sum of the bodies' H; the supplied work is the bodies'
-port work plus that of driven joints, so H_{n+1} - H_n = h y.u holds for the
-whole system.  Only what the system has is assembled: no joint, no
-multiplier block.
+A single body is a System with one body (`rodfem.Problem` builds one).  Each body keeps its own
+mesh, state space, forms and loads (rodfem/core/body.py); a joint (rodfem/core/joints.py,
+physics in forms/joints.py) couples points of two bodies through its multipliers.  The unknown
+of a step is the block vector X = (x_1, ..., x_k, lambda) of all bodies and all joints'
+multipliers; the residual is the bodies' residuals plus the joints' reactions and constraint
+rows, the Jacobian one PETSc matrix, both assembled by rodfem/fem/assembly.py (every body's
+block by the fast assembly).  H = sum of the bodies' H; the supplied work is the bodies' port
+work plus that of driven joints, so H_{n+1} - H_n = -h d_n + h y.u holds for the whole system.
+Only what the system has is assembled: no joint, no multiplier block.
+
+The time loop's view (rodfem/core/model.py, `SteppedSystem`): `t`, `dt`, `comm`,
+`set_step(h)`, `set_time(t)`, `predict(previous)`, `solve(step, t)`, `accept()`,
+`hamiltonian()`, `supplied_work()`, `dissipates`, `dissipated_energy()`, `observe()`.
 """
+from typing import Callable, Optional
+
 import numpy as np
-import ufl
-from dolfinx import fem, mesh as dmesh
-from dolfinx.fem import petsc as fpetsc
+from dolfinx import fem
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rodfem.fem import compat
 from rodfem.core.body import Body
-from rodfem.core.joints import ConstraintError, Joint, Point
-from rodfem.nls.newton import Newton
-from rodfem.core.problem import compile_forms
+from rodfem.core.joints import Frame, Joint, Point
+from rodfem.errors import ConstraintError
+from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
+from rodfem.fem.jit import compile_forms
+from rodfem.nls.newton import Newton, Solve
 
 
 class BodyRef:
@@ -67,34 +72,46 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
-    def __init__(self, integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None, momentum=None):
+    def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
+                 momentum: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
-        self.t = 0.0  # the time of the state x_n (the time loop advances it)
+        self.t = 0.0   # the time of the state x_n (the time loop advances it)
+        self.dt = 1.0  # the step h
         self.momentum = momentum
         self.bodies, self.joints, self.markers, self.recorders = {}, [], {}, []
         self._ready = False
 
     # -- the sketch -------------------------------------------------------------
-    def add(self, name, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None, shape=None):
+    def add(self, name: str, model, length: float = 1.0, n_elements: int = 1, loads=(), supports=(),
+            initial: Optional[dict] = None, shape=None) -> BodyRef:
         """Place a body: a flexible one on [0, length] with n_elements cells (or `shape` = (length,
-        initial), e.g. forms.planar_beam.straight(a, b)), or a rigid one (initial values only)."""
-        if name in self.bodies or not name or "." in name:
-            raise ValueError(f"body name {name!r} must be new, non-empty and without '.'")
+        initial), e.g. rodfem.forms.planar_beam.straight(a, b)), or a rigid one (initial values only)."""
+        if not isinstance(name, str) or name in self.bodies or not name or "." in name:
+            raise ConstraintError(f"body name {name!r} must be new, non-empty and without '.'")
         if shape is not None:
             if initial is not None:
-                raise ValueError(f"body {name}: give either shape or initial, not both")
+                raise ConstraintError(f"body {name}: give either shape or initial, not both")
             length, initial = shape
+        return self._place(name, model, length, n_elements, loads, supports, initial)
+
+    def _place(self, name, model, length, n_elements, loads, supports, initial):
+        if self._ready:
+            raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
+                                  "add every body before the first run")
         body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name)
         ref = BodyRef(name, body)
         self.bodies[name] = ref
         return ref
 
-    def join(self, constraint, a, b, name="", drive=None):
-        """Join point a to point b (or GROUND) by the joint `constraint` of forms/joints.py;
+    def join(self, constraint: Callable, a: Point, b: Point, name: str = "", drive: Optional[Callable] = None) -> Joint:
+        """Join point a to point b (or GROUND) by the joint `constraint` of rodfem/forms/joints.py;
         `drive(t)` (zero at t = 0) prescribes its motion: g(q) = drive(t)."""
+        if self._ready:
+            raise ConstraintError(f"joint {name or constraint}: the system has been built (it has run); "
+                                  "join every point before the first run")
         for p in (a, b):
             if not isinstance(p, Point):
                 raise ConstraintError(f"joint {name or constraint}: {p!r} is not a point (use body.start, .end, .point())")
@@ -108,11 +125,11 @@ class System:
         self.joints.append(joint)
         return joint
 
-    def marker(self, name, point):
+    def marker(self, name: str, point: Point):
         """Record the position of `point` in the history as columns name_x, name_y (, name_z)."""
         self.markers[name] = point
 
-    def record(self, columns):
+    def record(self, columns: Callable):
         """Record more history columns: `columns(system)` returns a dict of numbers for the state
         x_{n+1}; it is called on every rank (it may be collective)."""
         self.recorders.append(columns)
@@ -124,48 +141,54 @@ class System:
             return self
         refs = list(self.bodies.values())
         if not refs:
-            raise ValueError("a system needs at least one body")
+            raise ConstraintError("a system needs at least one body")
+        # the unnamed body of a Problem writes its own columns (tip or mean position, momentum
+        # maps when unsupported, its ports' columns); a System's bodies their total momentum maps,
+        # and the system its markers, joints and recorders
+        self.single = not self.named_bodies
         forms = {}
         for ref in refs:
             for key, f in ref.body.forms().items():
-                if not key.startswith("obs:"):
+                if not key.startswith("obs:") or self.single:
                     forms[(ref.name, key)] = f
         free = not any(r.body.supports for r in refs) and not any(
             j.a.body is None or j.b.body is None for j in self.joints)
-        if self.momentum or (self.momentum is None and free):   # total momentum maps
+        if not self.single and (self.momentum or (self.momentum is None and free)):   # total momentum maps
             for ref in refs:
                 X1 = ref.body.space.split(ref.body.x1)
                 for k, f in ref.body.momentum_forms(X1).items():
                     forms[(ref.name, "obs:" + k)] = f
-        self.lam_space = None
         size = 0
         for j in self.joints:
             j.offset = size
             size += self._bind(j)
-        if size:
-            self._multiplier_block(size, forms)
-        compiled = compile_forms(forms)
-        self.compiled = compiled
-        self.momenta = sorted({k[1][4:] for k in compiled if k[1].startswith("obs:")},
-                              key=lambda c: ("pL".index(c[0]), c))
-        self.assembler = BlockAssembler(self, compiled)
-        self.assembler.check_independent()
+        self.compiled = compile_forms(forms)
+        self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
+        self.columns = list(dict.fromkeys(self.columns))
+        if not self.single:
+            self.columns.sort(key=lambda c: ("pL".index(c[4]), c))
+        self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
+        self.points = PointIndex(self, self.layout) if (self.joints or self.markers) else None
+        self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
+                       for r in refs]
+        self.assembler = BlockAssembler(self.layout, self.blocks,
+                                        JointRows(self.points) if self.joints else None)
+        self.X1 = self.assembler.vector
+        self.X0 = self.layout.create_vector()
+        self._pull(self.X1, "x1")
+        self._pull(self.X0, "x0")
+        if self.joints:
+            self.points.check_independent(self.X0)
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._ready = True
         return self
 
-    def _multiplier_block(self, size, forms):
-        """lambda of all joints: DG0 on a mesh of one cell (a space the block assembly can hold)."""
-        m = dmesh.create_interval(self.comm, 1, [0.0, 1.0])
-        el = compat.element("DG", m, 0, (size,)) if size > 1 else compat.element("DG", m, 0)
-        self.lam_space = compat.functionspace(m, el)
-        self.lam = fem.Function(self.lam_space)
-        zero = fem.Constant(m, 0.0)
-        dl = ufl.TestFunction(self.lam_space)
-        F = zero * ufl.inner(self.lam, dl) * ufl.dx
-        forms[("joints", "F")] = F
-        forms[("joints", "J")] = ufl.derivative(F, self.lam)
+    def set_newton_options(self, options: Optional[dict]):
+        """A new Newton with these options (the matrix and assembly are kept)."""
+        self.build()
+        self.newton_options = options
+        self.newton = Newton(assembler=self.assembler, options=options)
 
     def _bind(self, joint):
         """Bind a joint to its points' frames and initial coordinates; returns its number of multipliers."""
@@ -193,6 +216,27 @@ class System:
             raise ConstraintError(f"joint {joint.name} ({joint.a.describe()} - {joint.b.describe()}): {err}") from None
         return joint.size
 
+    # -- the state: X <-> the bodies' Functions -----------------------------------
+    def _pull(self, X, which):
+        arr = X.getArray()
+        for blk, ref in zip(self.blocks, self.bodies.values()):
+            arr[blk.lo:blk.hi] = getattr(ref.body, which).x.array[: blk.hi - blk.lo]
+
+    def _push(self, X, which):
+        arr = X.getArray(readonly=True)
+        for blk, ref in zip(self.blocks, self.bodies.values()):
+            f = getattr(ref.body, which)
+            f.x.array[: blk.hi - blk.lo] = arr[blk.lo:blk.hi]
+            f.x.scatter_forward()
+
+    def set_state(self, X):
+        """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
+        self.build()
+        X.copy(self.X0)
+        X.copy(self.X1)
+        self._push(self.X0, "x0")
+        self._push(self.X1, "x1")
+
     # -- the time loop's view ---------------------------------------------------
     @property
     def loads(self):
@@ -202,35 +246,40 @@ class System:
     def supports(self):
         return [sup for r in self.bodies.values() for sup in r.body.supports]
 
-    def set_time(self, t):
+    def set_step(self, h: float):
+        """The step h of the next steps (every body's h)."""
+        self.dt = float(h)
+        for r in self.bodies.values():
+            r.body.h.value = h
+
+    def set_time(self, t: float):
+        """Inputs u(t) for the step (t = t_{n+1/2})."""
         self.build()
         for r in self.bodies.values():
             r.body.set_time(t)
-        self.t_mid = t
 
     def predict(self, previous):
+        """Newton's start x_{n+1}^0 = 2 x_n - x_{n-1} (x_n if `previous` is None); x_n is read from
+        the bodies (a change made to a body's x0 between steps takes effect)."""
         self.build()
-        A = self.assembler
+        self._pull(self.X0, "x0")
         if previous is None:
-            A.X1.array[:] = A.X0.array
+            self.X0.copy(self.X1)
         else:
-            A.X1.array[:] = 2.0 * A.X0.array - previous
+            self.X1.getArray()[:] = 2.0 * self.X0.getArray(readonly=True) - previous
 
-    def solve(self, step, t):
-        h = float(next(iter(self.bodies.values())).body.h.value)
-        self.assembler.times = (t - h, t, h)
+    def solve(self, step: int, t: float) -> Solve:
+        """x_{n+1} at time t by Newton (raises NewtonFailure)."""
+        if self.points is not None:
+            self.points.step(self.X0, t - self.dt, t, self.dt)
         return self.newton.solve(step, t)
 
     def accept(self):
-        A = self.assembler
-        previous = A.X0.array.copy()
-        A.X0.array[:] = A.X1.array
-        A.push(A.X0, "x0")
+        """x_n <- x_{n+1}; returns the old x_n (for the next prediction)."""
+        previous = self.X0.getArray(readonly=True).copy()
+        self.X1.copy(self.X0)
+        self._push(self.X0, "x0")
         return previous
-
-    @property
-    def h(self):
-        return _StepSize(self)
 
     # -- evaluation -------------------------------------------------------------
     def _sum(self, key):
@@ -238,65 +287,248 @@ class System:
                     if self.compiled.get((n, key)) is not None)
         return self.comm.allreduce(local, op=MPI.SUM)
 
-    def hamiltonian(self):
+    def assemble(self, compiled) -> float:
+        """A compiled scalar form, summed over the ranks."""
+        return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
+
+    def hamiltonian(self) -> float:
         """H(x_{n+1}) = sum of the bodies' H."""
         self.build()
         return self._sum("H")
 
-    def supplied_work(self):
+    def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports and the driven joints."""
-        return self._sum("work") + self.assembler.joint_work
+        joints = self.assembler.coupling.work if self.joints else 0.0
+        return self._sum("work") + joints
 
     @property
-    def dissipates(self):
+    def dissipates(self) -> bool:
         """True if a body dissipates (rodfem/core/model.py: `dissipation`)."""
         self.build()
         return any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
 
-    def dissipated_energy(self):
+    def dissipated_energy(self) -> float:
         """h d_n of the last step: the sum over the dissipating bodies."""
         return self._sum("dissipation")
 
-    def observe(self):
+    def observe(self) -> dict:
+        """The history's columns of the state x_{n+1}."""
         self.build()
-        obs = self.assembler.point_observables()
-        for k in self.momenta:
-            obs[k] = self._sum("obs:" + k)
+        obs = {}
+        if self.single:
+            obs.update({k[4:]: self._sum(k) for k in self.columns})
+        if self.points is not None:
+            obs.update(self.points.observe(self.X1))
+        if not self.single:
+            obs.update({k[4:]: self._sum(k) for k in self.columns})
         for columns in self.recorders:
             obs.update(columns(self))
         return obs
 
     @property
-    def dofs(self):
+    def dofs(self) -> int:
         self.build()
-        return self.assembler.X1.getSize()
+        return self.layout.size_global
 
     def describe_elements(self):
+        if list(self.bodies) == [""]:   # rodfem.Problem's one body
+            return next(iter(self.bodies.values())).body.describe_elements()
         return {name: r.body.describe_elements() for name, r in self.bodies.items()}
 
     def body(self, name):
         return self.bodies[name].body
 
-
-class _StepSize:
-    """system.h.value = dt sets the step of every body."""
-
-    def __init__(self, system):
-        self.system = system
+    def body_items(self):
+        """[(name, Body)] in the order of the block vector."""
+        return [(name, ref.body) for name, ref in self.bodies.items()]
 
     @property
-    def value(self):
-        return next(iter(self.system.bodies.values())).body.h.value
+    def named_bodies(self) -> bool:
+        """True for bodies placed by `add` (results labelled body by body); False for the one
+        unnamed body of a `rodfem.Problem`."""
+        return list(self.bodies) != [""]
 
-    @value.setter
-    def value(self, dt):
-        for r in self.system.bodies.values():
-            r.body.h.value = dt
+
+class PointIndex:
+    """The global indices of the joints' and markers' coordinates q, velocities v and multipliers
+    lambda in the system's block vector, and one scatter of those values to rank 0 (where the
+    joints' small dense terms are computed)."""
+
+    def __init__(self, system, layout):
+        self.system, self.comm, self.layout = system, system.comm, layout
+        self.joints = system.joints
+        blocks = {id(r.body): i for i, r in enumerate(system.bodies.values())}
+        l2g = {}
+
+        def globals_of(pc):
+            i = blocks[id(pc.point.body.body)]
+            if i not in l2g:
+                l2g[i] = layout.local_to_global(i)
+            own = layout.sizes[i]
+            g = np.array([[l2g[i][d] if 0 <= d < own else -1 for d in dofs] for dofs in (pc.q_dofs, pc.v_dofs)])
+            return allreduce_max(self.comm, g)
+        wanted = []
+        for j in self.joints:
+            q, v = [], []
+            for side in j.sides:
+                if side is not None:
+                    g = globals_of(side)
+                    q.append(g[0])
+                    v.append(g[1])
+            j.q_index = np.concatenate(q) if q else np.zeros(0, np.int64)
+            j.v_index = np.concatenate(v) if v else np.zeros(0, np.int64)
+            j.lam_index = layout.multipliers[j.offset:j.offset + j.size]
+            wanted += [j.q_index, j.v_index, j.lam_index]
+        self.marker_points = {}
+        for name, p in system.markers.items():
+            pc = point_coordinates(p, self.comm)
+            g = globals_of(pc)
+            self.marker_points[name] = (pc, g[0])
+            wanted.append(g[0])
+        self.wanted = np.unique(np.concatenate(wanted)).astype(PETSc.IntType) if wanted else np.zeros(0, PETSc.IntType)
+        # Dirichlet dofs among them: the joints leave those rows and columns alone
+        fixed = []
+        for i, r in enumerate(system.bodies.values()):
+            own = layout.sizes[i]
+            for bc in r.body.bcs:
+                dofs, n_owned = bc.dof_indices()
+                fixed += [layout.start + layout.offsets[i] + int(d) for d in dofs[:n_owned] if d < own]
+        self.fixed = set(np.concatenate(self.comm.allgather(np.array(fixed, dtype=np.int64))).tolist())
+        root = self.comm.rank == 0
+        self.gathered = PETSc.Vec().createSeq(len(self.wanted) if root else 0, comm=PETSc.COMM_SELF)
+        is_from = PETSc.IS().createGeneral(self.wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(system.X1 if hasattr(system, "X1") else layout.create_vector(),
+                                              is_from, self.gathered, None)
+        position = {int(g): k for k, g in enumerate(self.wanted)}
+        for j in self.joints:   # positions of each joint's indices in the gathered values
+            j.q_at, j.v_at, j.lam_at = ([position[int(g)] for g in idx] for idx in (j.q_index, j.v_index, j.lam_index))
+            j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
+            j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
+        self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
+        self.x0_values, self.times = None, (0.0, 0.0, 1.0)
+
+    def values(self, X):
+        """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
+        self.scatter.scatter(X, self.gathered, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
+
+    def step(self, X0, t0, t1, h):
+        """The step from x_n (X0) at t0 to t1 = t0 + h."""
+        self.x0_values, self.times = self.values(X0), (t0, t1, h)
+
+    def check_independent(self, X0):
+        """Refuse a redundant or inconsistent set of joints: the joints' velocity constraints
+        G(q_0) v = 0, restricted to the velocities not fixed by supports, must have full row rank
+        (else the multipliers are not unique and Newton's matrix is singular)."""
+        bad = None
+        vals = self.values(X0)
+        if self.comm.rank == 0:
+            cols = sorted({int(g) for j in self.joints for g in j.v_index if int(g) not in self.fixed})
+            where = {g: k for k, g in enumerate(cols)}
+            rows = []
+            for j in self.joints:
+                G = np.einsum("kij,j->ki", j.Q, vals[j.q_at]) + j.c
+                block = np.zeros((j.size, len(cols)))
+                for k, g in enumerate(j.v_index):
+                    if int(g) in where:
+                        block[:, where[int(g)]] += G[:, k]
+                rows.append(block)
+            G = np.vstack(rows)
+            sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
+            rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+            if rank < G.shape[0]:
+                names = ", ".join(j.name for j in self.joints)
+                bad = (f"the joints ({names}) impose {G.shape[0]} conditions of which only {rank} are "
+                       "independent (a redundant or inconsistent set, e.g. a joint at a supported end): "
+                       "remove the redundant ones")
+        bad = self.comm.bcast(bad, root=0)
+        if bad:
+            raise ConstraintError(bad)
+
+    def observe(self, X):
+        """Markers' positions, the joints' reactions lambda and the largest position residual |g|."""
+        vals = self.values(X)
+        obs = {}
+        if self.comm.rank == 0:
+            t1 = self.times[1]
+            worst = 0.0
+            for j in self.joints:
+                worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
+                for i, lam in enumerate(vals[j.lam_at]):
+                    obs[f"{j.name}.lambda{i + 1}"] = float(lam)
+            if self.joints:
+                obs["constraint_residual"] = worst
+            for name, (pc, _) in self.marker_points.items():
+                model = pc.point.body.body.model
+                x = model.frame(pc.unpack(vals[self.marker_at[name]]), pc.point.offset).x
+                for c, value in zip("xyz", x):
+                    obs[f"{name}_{c}"] = float(value)
+        return self.comm.bcast(obs, root=0)
+
+
+class JointRows:
+    """The joints' terms of a time step (rodfem/fem/assembly.py's coupling): the reactions
+    G(q_{n+1/2})^T lambda on the momentum rows and the velocity-level constraint rows
+    (rodfem/core/joints.py, `Joint.step`), computed on rank 0 and added at global indices."""
+
+    def __init__(self, points):
+        self.points, self.joints, self.comm = points, points.joints, points.comm
+        self.work = 0.0
+        self._terms = []
+
+    def entries(self):
+        """(rows, cols) of every entry the joints can fill (the same on every rank)."""
+        out = []
+        for j in self.joints:
+            v, q = j.v_index[j.rows], j.q_index[j.qcols]
+            lam = j.lam_index
+            for r, c in ((v, q), (v, lam), (lam, q), (lam, v)):
+                R, C = np.meshgrid(r, c, indexing="ij")
+                out.append((R.ravel(), C.ravel()))
+        return out
+
+    def update(self, X):
+        """The joints' terms at the iterate X (rank 0; nothing elsewhere)."""
+        vals = self.points.values(X)
+        self._terms = []
+        if self.comm.rank == 0:
+            v0 = self.points.x0_values
+            t0, t1, h = self.points.times
+            for j in self.joints:
+                self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1)))
+
+    def terms(self, j, v0, v1, h, t0, t1):
+        """(r_v, r_lam, {(rows, cols): block}, work) of joint j."""
+        r_v, r_lam, drv_dq, drv_dl, drl_dq, drl_dv, work = j.step(
+            v0[j.q_at], v1[j.q_at], v0[j.v_at], v1[j.v_at], v1[j.lam_at], h, t0, t1)
+        return r_v, r_lam, (("v", "q", drv_dq), ("v", "lam", drv_dl), ("lam", "q", drl_dq), ("lam", "v", drl_dv)), work
+
+    def residual(self, X, b):
+        work = 0.0
+        for j, r_v, r_lam, _, w in self._terms:
+            b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
+                        addv=PETSc.InsertMode.ADD)
+            b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
+            work += w
+        self.work = self.comm.bcast(work, root=0)
+
+    def jacobian(self, X, A):
+        for j, _, _, blocks, _ in self._terms:
+            index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(j.size)))}
+            for rk, ck, block in blocks:
+                (r_idx, r_sel), (c_idx, c_sel) = index[rk], index[ck]
+                if len(r_sel) and len(c_sel):
+                    _add(A, r_idx[list(r_sel)], c_idx[list(c_sel)], block[np.ix_(list(r_sel), list(c_sel))])
+
+
+def _add(A, rows, cols, values):
+    """A[rows, cols] += values (PETSc reads the values row by row: make them C-contiguous)."""
+    A.setValues(np.asarray(rows, dtype=PETSc.IntType), np.asarray(cols, dtype=PETSc.IntType),
+                np.ascontiguousarray(values, dtype=PETSc.ScalarType), addv=PETSc.InsertMode.ADD)
 
 
 def ground_frame(point, dim):
     """The fixed Frame of a ground point in `dim` dimensions."""
-    from rodfem.core.joints import Frame
     x = np.zeros(dim) if not point.offset else np.asarray(point.offset, dtype=float)
     if len(x) != dim:
         raise ConstraintError(f"{point.describe()}: a ground point in {dim} dimensions needs {dim} coordinates")
@@ -359,252 +591,7 @@ def point_coordinates(point, comm):
     for i, d in enumerate(pc.q_dofs):
         if 0 <= d < nloc:
             vals[i] = body.x0.x.array[d]
-    pc._values[0] = _max(comm, vals)
+    pc._values[0] = allreduce_max(comm, vals)
     return pc
 
 
-def _add(A, rows, cols, values):
-    """A[rows, cols] += values (PETSc reads the values row by row: make them C-contiguous)."""
-    A.setValues(np.asarray(rows, dtype=PETSc.IntType), np.asarray(cols, dtype=PETSc.IntType),
-                np.ascontiguousarray(values, dtype=PETSc.ScalarType), addv=PETSc.InsertMode.ADD)
-
-
-def _max(comm, array):
-    """Elementwise maximum over the ranks (each entry is known on the rank that owns it)."""
-    array = np.ascontiguousarray(array, dtype=float if np.asarray(array).dtype.kind == "f" else np.int64)
-    comm.Allreduce(MPI.IN_PLACE, array, op=MPI.MAX)
-    return array
-
-
-class BlockAssembler:
-    """Residual and Jacobian of the system on the block vector (x_1, ..., x_k, lambda)."""
-
-    def __init__(self, system, compiled):
-        self.system, self.comm = system, system.comm
-        refs = list(system.bodies.values())
-        self.bodies = [r.body for r in refs]
-        self.F = [compiled[(r.name, "F")] for r in refs]
-        J = [compiled[(r.name, "J")] for r in refs]
-        self.spaces = [b.space.V for b in self.bodies]
-        self.x1s = [b.x1 for b in self.bodies]
-        self.x0s = [b.x0 for b in self.bodies]
-        if system.lam_space is not None:
-            self.F.append(compiled[("joints", "F")])
-            J.append(compiled[("joints", "J")])
-            self.spaces.append(system.lam_space)
-            self.x1s.append(system.lam)
-            self.x0s.append(None)
-        k = len(self.F)
-        self.J = [[J[i] if i == j else None for j in range(k)] for i in range(k)]
-        self.bcs = [bc for b in self.bodies for bc in b.bcs]
-        self.X1 = fpetsc.create_vector_block(self.F)
-        self.X0 = self.X1.duplicate()
-        self.vector = self.X1
-        self.sizes = [V.dofmap.index_map.size_local * V.dofmap.index_map_bs for V in self.spaces]
-        self.offsets = np.concatenate([[0], np.cumsum(self.sizes)])
-        self.start = self.X1.getOwnershipRange()[0]
-        self.pull(self.X1, "x1")
-        self.X1.copy(self.X0)
-        self.joints = system.joints
-        self.joint_work = 0.0
-        self.times = (0.0, 0.0, 1.0)
-        self._index_points()
-
-    # -- block vector <-> the bodies' Functions ---------------------------------
-    def pull(self, X, which):
-        arr = X.getArray()
-        for i, b in enumerate(self.bodies):
-            arr[self.offsets[i]:self.offsets[i + 1]] = getattr(b, which).x.array[: self.sizes[i]]
-
-    def push(self, X, which):
-        arr = X.getArray(readonly=True)
-        funcs = self.x1s if which == "x1" else self.x0s
-        for i, f in enumerate(funcs):
-            if f is not None:
-                f.x.array[: self.sizes[i]] = arr[self.offsets[i]:self.offsets[i + 1]]
-                f.x.scatter_forward()
-
-    def update(self, xin):
-        if xin.handle != self.X1.handle:
-            xin.copy(self.X1)
-        self.X1.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self.push(self.X1, "x1")
-
-    # -- global indices of the joints' and markers' coordinates ------------------
-    def _global(self, block, local):
-        """Global block index of local dof `local` of block `block` (-1 if not owned here)."""
-        if local < 0 or local >= self.sizes[block]:
-            return -1
-        return self.start + self.offsets[block] + local
-
-    def _index_points(self):
-        """For every joint side and marker: global indices of q and v; one scatter to rank 0."""
-        comm = self.comm
-        index = {id(r.body): i for i, r in enumerate(self.system.bodies.values())}
-        wanted = []
-
-        def globals_of(pc):
-            block = index[id(pc.point.body.body)]
-            g = np.array([[self._global(block, d) for d in pc.q_dofs], [self._global(block, d) for d in pc.v_dofs]])
-            return _max(comm, g)
-        for j in self.joints:
-            j.q_index, j.v_index = [], []
-            for side in j.sides:
-                if side is None:
-                    continue
-                g = globals_of(side)
-                j.q_index.append(g[0])
-                j.v_index.append(g[1])
-                wanted += [g[0], g[1]]
-            j.q_index = np.concatenate(j.q_index) if j.q_index else np.zeros(0, int)
-            j.v_index = np.concatenate(j.v_index) if j.v_index else np.zeros(0, int)
-            lam_block = len(self.bodies)
-            j.lam_index = _max(comm, np.array([self._global(lam_block, j.offset + i) for i in range(j.size)]))
-            wanted.append(j.lam_index)
-        self.marker_points = {}
-        for name, p in self.system.markers.items():
-            pc = point_coordinates(p, comm)
-            g = globals_of(pc)
-            self.marker_points[name] = (pc, g[0])
-            wanted.append(g[0])
-        self.wanted = np.unique(np.concatenate(wanted)).astype(PETSc.IntType) if wanted else np.zeros(0, PETSc.IntType)
-        # Dirichlet dofs among them: the joints leave those rows and columns alone
-        bc_local = [(i, bc) for i, b in enumerate(self.bodies) for bc in b.bcs]
-        fixed = []
-        for i, bc in bc_local:
-            dofs, n_owned = bc.dof_indices()
-            fixed += [self._global(i, int(d)) for d in dofs[:n_owned]]
-        self.fixed = set(np.concatenate(comm.allgather(np.array(fixed, dtype=int))).tolist())
-        root = comm.rank == 0
-        n = len(self.wanted) if root else 0
-        self.gathered = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
-        is_from = PETSc.IS().createGeneral(self.wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
-        self.scatter = PETSc.Scatter().create(self.X1, is_from, self.gathered, None)
-        self.position = {int(g): k for k, g in enumerate(self.wanted)}
-        self._positions = {}   # index array -> positions in the gathered values (found once)
-
-    def check_independent(self):
-        """Refuse a redundant or inconsistent set of joints: the joints' velocity constraints
-        G(q_0) v = 0, restricted to the velocities not fixed by supports, must have full row rank
-        (else the multipliers are not unique and Newton's matrix is singular)."""
-        if not self.joints:
-            return
-        bad = None
-        if self.comm.rank == 0:
-            vals = self._values(self.X0)
-            cols = sorted({int(g) for j in self.joints for g in j.v_index if int(g) not in self.fixed})
-            where = {g: k for k, g in enumerate(cols)}
-            rows = []
-            for j in self.joints:
-                G = np.einsum("kij,j->ki", j.Q, self._pick(vals, j.q_index)) + j.c
-                block = np.zeros((j.size, len(cols)))
-                for k, g in enumerate(j.v_index):
-                    if int(g) in where:
-                        block[:, where[int(g)]] += G[:, k]
-                rows.append(block)
-            G = np.vstack(rows)
-            sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
-            rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
-            if rank < G.shape[0]:
-                names = ", ".join(j.name for j in self.joints)
-                bad = (f"the joints ({names}) impose {G.shape[0]} conditions of which only {rank} are "
-                       "independent (a redundant or inconsistent set, e.g. a joint at a supported end): "
-                       "remove the redundant ones")
-        else:
-            self._values(self.X0)
-        bad = self.comm.bcast(bad, root=0)
-        if bad:
-            raise ConstraintError(bad)
-
-    def _values(self, X):
-        """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
-        self.scatter.scatter(X, self.gathered, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
-
-    def _pick(self, vals, idx):
-        """vals at the global indices idx (positions looked up once per index array; the cache keeps
-        the array itself, so a new array that reuses a freed array's id() is not mistaken for it)."""
-        hit = self._positions.get(id(idx))
-        if hit is None or hit[0] is not idx:
-            hit = self._positions[id(idx)] = (idx, np.array([self.position[int(g)] for g in idx], dtype=int))
-        return vals[hit[1]]
-
-    # -- the joints' contributions ---------------------------------------------
-    def _joint_terms(self, X):
-        """Yield per joint: (rows_v, rows_lam, cols_q, cols_v, step terms) on rank 0."""
-        v1, v0 = self._values(X), self._values(self.X0)
-        if self.comm.rank != 0:
-            return []
-        t0, t1, h = self.times
-        out = []
-        for j in self.joints:
-            q0, q1 = self._pick(v0, j.q_index), self._pick(v1, j.q_index)
-            w0, w1 = self._pick(v0, j.v_index), self._pick(v1, j.v_index)
-            lam = self._pick(v1, j.lam_index)
-            out.append((j, j.step(q0, q1, w0, w1, lam, h, t0, t1), q1))
-        return out
-
-    def residual(self, xin, b):
-        self.update(xin)
-        with b.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector_block(b, self.F, self.J, bcs=self.bcs, x0=self.X1, scale=-1.0)
-        work = 0.0
-        for j, (r_v, r_lam, *_, w), _q1 in self._joint_terms(self.X1):
-            keep = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]
-            b.setValues(j.v_index[keep].astype(PETSc.IntType), np.ascontiguousarray(r_v[keep]), addv=PETSc.InsertMode.ADD)
-            b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
-            work += w
-        b.assemblyBegin()
-        b.assemblyEnd()
-        self.joint_work = self.comm.bcast(work, root=0)
-
-    def create_vector(self):
-        return fpetsc.create_vector_block(self.F)
-
-    def create_matrix(self):
-        """The block matrix: each body's block with its own mesh's sparsity (DOLFINx 0.5's
-        create_matrix_block would use the first block's mesh for all).  The joints' entries are
-        inserted at the first assembly and kept (zeroEntries keeps the nonzero structure)."""
-        A = compat.create_block_matrix(self.comm, [self.J[i][i] for i in range(len(self.J))])
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
-        A.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, False)   # rank 0 adds the joints' rows everywhere
-        return A
-
-    def jacobian(self, xin, A):
-        A.zeroEntries()
-        fpetsc.assemble_matrix_block(A, self.J, bcs=self.bcs)
-        A.assemble(PETSc.Mat.AssemblyType.FLUSH)   # the Dirichlet diagonal was inserted; the joints add
-        for j, (_rv, _rl, drv_dq, drv_dl, drl_dq, drl_dv, _w), _q1 in self._joint_terms(self.X1):
-            rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]   # momentum rows
-            qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
-            vcols = rows
-            lam = range(j.size)
-            for (r_idx, r_sel), (c_idx, c_sel), block in (
-                    ((j.v_index, rows), (j.q_index, qcols), drv_dq), ((j.v_index, rows), (j.lam_index, lam), drv_dl),
-                    ((j.lam_index, lam), (j.q_index, qcols), drl_dq), ((j.lam_index, lam), (j.v_index, vcols), drl_dv)):
-                if len(r_sel) and len(c_sel):
-                    _add(A, r_idx[list(r_sel)], c_idx[list(c_sel)], block[np.ix_(list(r_sel), list(c_sel))])
-        A.assemble()
-
-    # -- outputs of joints and markers --------------------------------------------
-    def point_observables(self):
-        """Markers' positions, the joints' reactions lambda and the largest position residual |g|."""
-        vals = self._values(self.X1)
-        obs = {}
-        if self.comm.rank == 0:
-            t1 = self.times[1]
-            worst = 0.0
-            for j in self.joints:
-                q1 = self._pick(vals, j.q_index)
-                worst = max(worst, float(np.max(np.abs(j.position_residual(q1, t1)))) if j.size else 0.0)
-                for i, lam in enumerate(self._pick(vals, j.lam_index)):
-                    obs[f"{j.name}.lambda{i + 1}"] = float(lam)
-            if self.joints:
-                obs["constraint_residual"] = worst
-            for name, (pc, qidx) in self.marker_points.items():
-                model = pc.point.body.body.model
-                x = model.frame(pc.unpack(self._pick(vals, qidx)), pc.point.offset).x
-                for c, value in zip("xyz", x):
-                    obs[f"{name}_{c}"] = float(value)
-        return self.comm.bcast(obs, root=0)

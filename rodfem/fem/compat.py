@@ -9,8 +9,8 @@ feature, never by version string.  No other module may test for versions.
 import inspect
 
 import ufl
-from dolfinx import fem
 from dolfinx import __version__ as dolfinx_version  # noqa: F401  (re-exported)
+from dolfinx import fem
 
 LEGACY_UFL = hasattr(ufl, "FiniteElement")
 

@@ -33,8 +33,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rodfem.fem import cbuild
-from rodfem.la import petsc_raw
+from rodfem.fem import cbuild, petsc_raw
 
 SPARSE_ENOUGH = 1 / 3   # keep the pattern of possible nonzeros when it has at most this share of DOLFINx's
 DRAWS = (1.0, 1e-3)     # scales of the random states that find the possible nonzeros
@@ -46,7 +45,8 @@ C_SOURCE = r"""
 
 #define MAXPAT 8
 /* an entry for MatSetValues (local row and column); -1: the buffer is full */
-#define PUSH(r, c, v) do { if (ng >= gcap) { status = -1; break; } grow[ng] = (r); gcol[ng] = (c); gval[ng] = (v); ++ng; } while (0)
+#define PUSH(r, c, v) do { if (ng >= gcap) { status = -1; break; } \
+                            grow[ng] = (r); gcol[ng] = (c); gval[ng] = (v); ++ng; } while (0)
 
 typedef void (*kernel_t)(double*, const double*, const double*, const double*, const int*, const uint8_t*);
 
@@ -73,7 +73,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap)
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff)
 {
   kernel_t kernel = (kernel_t)kernel_address;
   double* Ae = malloc(sizeof(double) * nd * nd);
@@ -100,7 +100,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
     for (int j = 0; j < nd; ++j) {
       int32_t col = cd[j];
       if (bc[col]) continue;
-      if (col < nown) { key_d[nD] = col; idx_d[nD++] = j; }
+      if (col < nown) { key_d[nD] = col + roff; idx_d[nD++] = j; }
       else { key_o[nO] = ghost_col[col - nown]; idx_o[nO++] = j; }
     }
     sort_by_key(nD, key_d, idx_d);
@@ -113,7 +113,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
       if (row < nown) {
         /* the positions of this cell's columns in the row: rows of the same node share their
            column list, so a list seen before in this cell gives them without a search */
-        int start = di[row], len = di[row + 1] - start;
+        int start = di[row + roff], len = di[row + roff + 1] - start;
         const int32_t* cols = dj + start;
         int32_t* rank = NULL;
         for (int q = 0; q < npat; ++q)
@@ -137,7 +137,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
           else if (v != 0.0) { PUSH(row, cd[idx_d[k]], v); }
         }
         if (nO) {
-          int p = oi[row], end = oi[row + 1];
+          int p = oi[row + roff], end = oi[row + roff + 1];
           for (int k = 0; k < nO; ++k) {
             double v = Ai[idx_o[k]];
             while (p < end && oj[p] < key_o[k]) ++p;
@@ -195,7 +195,7 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets, uintptr_
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap);
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff);
 void rodfem_element_pattern(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
                             int nd, int nx, const int32_t* xdofs, const double* x,
                             const double* coeffs, int cstride, const double* consts, uint8_t* mask);
@@ -217,8 +217,14 @@ class _Block:
 
 
 class FastJacobian:
-    """Assembles the compiled bilinear form `J` (Dirichlet conditions `bcs`) into a PETSc matrix
-    (`create_matrix`) without MatSetValues for the owned rows."""
+    """Assembles the compiled bilinear form `J` (Dirichlet conditions `bcs`) into its block of a
+    PETSc matrix (rodfem/fem/assembly.py) without MatSetValues for the owned rows.
+
+        fast = FastJacobian(J, bcs)
+        rows, cols = fast.entries()      # local dofs: the entries the matrix must hold
+        fast.attach(A, row_offset, l2g)  # the block starts at local row row_offset; l2g: dof -> global
+        fast.add(A)                      # after A.zeroEntries(), before A.assemble()
+    """
 
     @staticmethod
     def usable(J):
@@ -230,7 +236,6 @@ class FastJacobian:
 
     def __init__(self, J, bcs):
         from dolfinx.fem import IntegralType
-        from dolfinx.fem import petsc as fpetsc
         self.J, self.bcs = J, list(bcs)
         V = J.function_spaces[0]
         self.mod = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, V.mesh.comm)
@@ -240,11 +245,11 @@ class FastJacobian:
         self.dofs = np.ascontiguousarray(dofmap_list.array, dtype=np.int32)
         self.nd = V.dofmap.dof_layout.num_dofs
         self.xdofs = np.ascontiguousarray(mesh.geometry.dofmap.array, dtype=np.int32)
-        self.nx = int(mesh.geometry.dofmap.offsets[1] - mesh.geometry.dofmap.offsets[0])
+        offsets = mesh.geometry.dofmap.offsets
+        self.nx = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 0   # (a rank without cells: none)
         assert self.nx <= 64
         im = V.dofmap.index_map
         self.nown, nghost = im.size_local, im.num_ghosts
-        self.l2g = im.local_to_global(np.arange(self.nown + nghost, dtype=np.int32)).astype(PETSc.IntType)
         bc = np.zeros(self.nown + nghost, np.int8)
         for b in self.bcs:
             idx = b.dof_indices()[0]
@@ -271,18 +276,38 @@ class FastJacobian:
         self.comm = mesh.comm
         masks = self._element_masks()
         share = self.comm.allreduce(max((m.mean() for m in masks), default=1.0), op=MPI.MAX)
-        if share <= SPARSE_ENOUGH:
-            self.A = self._matrix_of(masks)
-        else:
-            self.A = fpetsc.create_matrix(J)
-            # one assembly by DOLFINx fixes the nonzero structure (what it inserts: the element
-            # couplings without the Dirichlet rows and columns, plus their diagonal)
-            fpetsc.assemble_matrix(self.A, J, bcs=self.bcs)
-            self.A.assemble()
+        # the pattern of possible nonzeros where it is sparse enough, else every element coupling
+        # (DOLFINx's pattern: its identical rows solve faster, PETSc's inodes)
+        self.dense = share > SPARSE_ENOUGH
+        self.masks = [np.ones_like(m) for m in masks] if self.dense else masks
+        self.A, self.roff = None, 0
+
+    def entries(self):
+        """(rows, cols): local dofs of the entries the matrix must hold: the element masks' entries
+        of every cell (rows of ghost dofs included: their owner holds them) without the Dirichlet
+        rows and columns (kept in DOLFINx's dense pattern, as its assembly leaves them), and the
+        owned diagonal."""
+        cell_dofs = self.dofs.reshape(-1, self.nd)
+        rows, cols = [np.arange(self.nown, dtype=np.int32)], [np.arange(self.nown, dtype=np.int32)]
+        for (*_, cells, _), mask in zip(self.integrals, self.masks):
+            I, J = np.nonzero(mask)
+            cd = cell_dofs[cells]
+            r, c = cd[:, I].ravel(), cd[:, J].ravel()
+            keep = slice(None) if self.dense else (self.bc[r] == 0) & (self.bc[c] == 0)
+            rows.append(r[keep])
+            cols.append(c[keep])
+        return np.concatenate(rows), np.concatenate(cols)
+
+    def attach(self, A, row_offset, l2g):
+        """Assemble into A from now on: this form's owned rows start at local row `row_offset` of A,
+        l2g maps its local dofs (owned and ghosts) to A's global indices."""
+        self.A, self.roff = A, int(row_offset)
+        self.l2g = np.asarray(l2g).astype(PETSc.IntType)
         self._structure()
 
-    def create_matrix(self):
-        return self.A
+    def restructure(self):
+        """Re-read A's structure after entries outside it were inserted."""
+        self._structure()
 
     def _structure(self):
         """The CSR structure of A's blocks, where the columns of the ghost dofs are, the diagonal
@@ -291,9 +316,8 @@ class FastJacobian:
         self.diag = _Block(Ad)
         self.off = _Block(Ao) if Ao is not None else None
         self.ghost_col = np.zeros(1, np.int32)
-        im = self.V.dofmap.index_map
         if self.off is not None:
-            ghosts = np.asarray(im.ghosts, dtype=np.int64)
+            ghosts = np.asarray(self.l2g[self.nown:], dtype=np.int64)
             pos = np.searchsorted(garray, ghosts)
             ok = pos < len(garray)
             ok[ok] = garray[pos[ok]] == ghosts[ok]
@@ -301,13 +325,13 @@ class FastJacobian:
                 self.ghost_col = np.where(ok, pos, -1).astype(np.int32)
         # diagonal positions of the Dirichlet rows (1 on the diagonal, as DOLFINx's insert_diagonal)
         d = self.diag
-        self.bc_diag = np.array([d.i[r] + np.flatnonzero(d.j[d.i[r]:d.i[r + 1]] == r)[0] for r in self.bc_rows],
+        rows = self.bc_rows + self.roff
+        self.bc_diag = np.array([d.i[r] + np.flatnonzero(d.j[d.i[r]:d.i[r + 1]] == r)[0] for r in rows],
                                 dtype=np.int64)
         if not hasattr(self, "gcap"):   # ghost-row buffer: every entry of the cells that touch a ghost row
             touches = (self.dofs.reshape(-1, self.nd) >= self.nown).any(axis=1)
             ntouch = sum(int(np.count_nonzero(touches[cells])) for _, _, _, cells, _ in self.integrals)
             self._buffer(max(ntouch * self.nd * self.nd, 1))
-        self.nonzero_state = petsc_raw.nonzero_state(self.A)
         self.__dict__.pop("_static", None)
 
     def _buffer(self, capacity):
@@ -342,36 +366,6 @@ class FastJacobian:
             masks.append(mask.reshape(self.nd, self.nd).astype(bool))
         return masks
 
-    def _matrix_of(self, masks):
-        """An AIJ matrix with the entries of the element `masks` (Dirichlet rows and columns left
-        out) and the diagonal; the entries of rows owned by another rank are sent to it."""
-        cell_dofs = self.dofs.reshape(-1, self.nd)
-        rows, cols = [np.arange(self.nown, dtype=np.int32)], [np.arange(self.nown, dtype=np.int32)]
-        for (*_, cells, _), mask in zip(self.integrals, masks):
-            I, J = np.nonzero(mask)
-            cd = cell_dofs[cells]
-            r, c = cd[:, I].ravel(), cd[:, J].ravel()
-            keep = (self.bc[r] == 0) & (self.bc[c] == 0)
-            rows.append(r[keep])
-            cols.append(c[keep])
-        r, c = np.concatenate(rows), np.concatenate(cols)
-        N = self.V.dofmap.index_map.size_global
-        key = self.l2g[r].astype(np.int64) * N + self.l2g[c]
-        ghost = r >= self.nown
-        if self.comm.size > 1:   # the entries of other ranks' rows go to their owners
-            owner = np.asarray(self.V.dofmap.index_map.owners)[r[ghost] - self.nown]
-            sent = [key[ghost][owner == p] for p in range(self.comm.size)]
-            key = np.concatenate([key[~ghost]] + self.comm.alltoall(sent))
-        key = np.unique(key)
-        grow, gcol = np.divmod(key, N)
-        start = self.V.dofmap.index_map.local_range[0]
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(grow - start, minlength=self.nown))])
-        A = PETSc.Mat().createAIJ(((self.nown, N), (self.nown, N)),
-                                  csr=(indptr.astype(PETSc.IntType), gcol.astype(PETSc.IntType)), comm=self.comm)
-        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)   # the pattern may grow
-        A.assemble()
-        return A
-
     # -- assembly -------------------------------------------------------------------------
     def _arguments(self):
         """The arguments of rodfem_assemble that do not change between assemblies (pointers kept alive)."""
@@ -400,52 +394,48 @@ class FastJacobian:
         consts = np.ascontiguousarray(cpp.fem.pack_constants(self.J), dtype=np.float64)
         return coeffs, consts
 
-    def assemble(self, A):
-        """A <- J (A: the matrix of create_matrix)."""
-        self._add(A, *self._packed())
-
-    def _add(self, A, coeffs, consts):
-        """A <- the form with these coefficients and constants."""
+    def add(self, A):
+        """Add J at the current state into A (zeroed before; the caller assembles A after).  False
+        when the entries for MatSetValues did not fit the buffer (it is doubled: zero A, try again)."""
+        coeffs, consts = self._packed()
         ffi, lib = self.mod.ffi, self.mod.lib
         if consts.size == 0:
             consts = np.zeros(1)
         x = self.V.mesh.geometry.x
         if not (x.flags.c_contiguous and x.dtype == np.float64):
             x = np.ascontiguousarray(x, dtype=np.float64)
-        while True:
-            if not hasattr(self, "_static"):
-                self._arguments()
-            st = self._static
-            A.zeroEntries()
-            da = ffi.cast("double*", self.diag.open())
-            oa = ffi.cast("double*", self.off.open()) if self.off is not None else ffi.NULL
-            ng_total = 0
-            try:
-                for itype, i, address, n, cells, facets in self._entities:
-                    c = np.ascontiguousarray(coeffs[(itype, i)], dtype=np.float64)
-                    cstride = c.shape[1] if c.ndim == 2 else 0
-                    if c.size == 0:
-                        c = np.zeros(1)
-                    ng = lib.rodfem_assemble(
-                        n, cells, facets, address, self.nd, st["dofs"], self.nx, st["xdofs"],
-                        ffi.from_buffer("double[]", x), ffi.from_buffer("double[]", c), cstride,
-                        ffi.from_buffer("double[]", consts), st["bc"], self.nown,
-                        st["di"], st["dj"], da, st["oi"], st["oj"], oa, st["ghost_col"],
-                        ffi.from_buffer("int32_t[]", self.grow[ng_total:]),
-                        ffi.from_buffer("int32_t[]", self.gcol[ng_total:]),
-                        ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total)
-                    if ng < 0:
-                        break
-                    ng_total += ng
-                if ng >= 0 and len(self.bc_diag):
-                    lib.rodfem_set(da, len(self.bc_diag), st["bc_diag"], 1.0)
-            finally:
-                self.diag.close()
-                if self.off is not None:
-                    self.off.close()
-            if ng >= 0:
-                break
+        if not hasattr(self, "_static"):
+            self._arguments()
+        st = self._static
+        da = ffi.cast("double*", self.diag.open())
+        oa = ffi.cast("double*", self.off.open()) if self.off is not None else ffi.NULL
+        ng_total = 0
+        try:
+            for itype, i, address, n, cells, facets in self._entities:
+                c = np.ascontiguousarray(coeffs[(itype, i)], dtype=np.float64)
+                cstride = c.shape[1] if c.ndim == 2 else 0
+                if c.size == 0:
+                    c = np.zeros(1)
+                ng = lib.rodfem_assemble(
+                    n, cells, facets, address, self.nd, st["dofs"], self.nx, st["xdofs"],
+                    ffi.from_buffer("double[]", x), ffi.from_buffer("double[]", c), cstride,
+                    ffi.from_buffer("double[]", consts), st["bc"], self.nown,
+                    st["di"], st["dj"], da, st["oi"], st["oj"], oa, st["ghost_col"],
+                    ffi.from_buffer("int32_t[]", self.grow[ng_total:]),
+                    ffi.from_buffer("int32_t[]", self.gcol[ng_total:]),
+                    ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total, self.roff)
+                if ng < 0:
+                    break
+                ng_total += ng
+            if ng >= 0 and len(self.bc_diag):
+                lib.rodfem_set(da, len(self.bc_diag), st["bc_diag"], 1.0)
+        finally:
+            self.diag.close()
+            if self.off is not None:
+                self.off.close()
+        if ng < 0:
             self._buffer(2 * self.gcap)   # more entries for MatSetValues than room: again, with twice the room
+            return False
         if ng_total:
             rows = self.l2g[self.grow[:ng_total]]
             cols = self.l2g[self.gcol[:ng_total]]
@@ -455,6 +445,4 @@ class FastJacobian:
             cut = np.flatnonzero(np.diff(rows)) + 1
             for r, c, v in zip(np.split(rows, cut), np.split(cols, cut), np.split(vals, cut)):
                 A.setValues(r[:1], c, v, addv=PETSc.InsertMode.ADD_VALUES)
-        A.assemble()
-        if petsc_raw.nonzero_state(A) != self.nonzero_state:   # an entry outside the pattern was inserted
-            self._structure()
+        return True

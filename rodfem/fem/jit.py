@@ -24,8 +24,8 @@ import inspect
 import os
 from contextlib import contextmanager
 
-from rodfem.fem import compat
 from rodfem.errors import InputError, agreed
+from rodfem.fem import compat
 
 LOCK_NAME = "rodfem-jit.lock"
 _held = {"depth": 0}
@@ -125,3 +125,19 @@ def compiles(init):
         with locked(bound.arguments["comm"]):
             return init(*args, **kwargs)
     return wrapper
+
+
+def compile_forms(forms):
+    """Compile a dict of UFL forms (None stays None) under the cache lock.
+
+    Every form is built before any is compiled: UFL's signatures (the JIT
+    cache keys) depend on global counters that a compilation advances, so
+    compiling F before J is even built would give J a different key in a cold
+    and a warm process (a second run would recompile).
+    """
+    for f in forms.values():
+        if f is not None:
+            f.signature()  # computed (and kept by UFL) before any compilation
+    comm = compat.form_comm(next(f for f in forms.values() if f is not None))
+    with locked(comm):
+        return {k: compat.form(f) if f is not None else None for k, f in forms.items()}

@@ -28,6 +28,12 @@ chord Newton of the 3D rod scenes, ``snes_lag_jacobian`` persisting): a run
 that writes checkpoints starts a fresh solver after each checkpoint, as the
 resumed run does, so both compute the same iterates (such a run differs
 from one without checkpoints at Newton's tolerance, not beyond).
+
+Under MPI the run keeps its solver: the parallel interface Schur complement
+(rodfem/la/schur.py) is a fixed sequence of local factorizations and
+allreduces, the same from run to run (measured: identical histories of
+repeated `mpirun -n 2` runs), so a checkpointed run and its resumption
+compute the same numbers, and summary.json names the solver that ran.
 """
 import csv
 import io
@@ -37,10 +43,9 @@ import xml.etree.ElementTree as ET
 from types import SimpleNamespace
 
 import numpy as np
-from mpi4py import MPI
 
-from rodfem.nls.newton import LU_CHAIN, lu_name
-from rodfem.app.scene import ParameterError
+from rodfem.errors import ParameterError
+from rodfem.la.lu_chain import LU_CHAIN, lu_name
 
 FORMAT = 1
 NAME = "checkpoint.npz"
@@ -50,8 +55,7 @@ CHANGEABLE = ("t_end", "checkpoint_every")
 # -- partition-independent state --------------------------------------------------------------
 
 def _bodies(problem):
-    refs = getattr(problem, "bodies", None)
-    return [(n, r.body) for n, r in refs.items()] if isinstance(refs, dict) else [("", problem)]
+    return problem.body_items()
 
 
 def _field_keys(body, name):
@@ -89,7 +93,8 @@ def _pack(problem, arrays, comm):
         for f in body.space.fields:
             if body.rigid:
                 dofs = _rigid_dofs(body, f.name)
-                keys, vals = np.zeros((1 if len(dofs) else 0, 2), np.int64), arr[dofs].reshape(1, -1) if len(dofs) else np.zeros((0, f.size))
+                keys = np.zeros((1 if len(dofs) else 0, 2), np.int64)
+                vals = arr[dofs].reshape(1, -1) if len(dofs) else np.zeros((0, f.size))
             else:
                 dofs, keys, nloc = _field_keys(body, f.name)
                 keys, vals = keys[:nloc], arr[dofs[:nloc]]
@@ -124,47 +129,33 @@ def _unpack(problem, data, arrays):
 
 
 class _Layout:
-    """The time loop's state vector of a Problem (x0.x.array) or a System (the block X0 array)
+    """The time loop's state vector of a system (its block vector X0: bodies, then multipliers)
     as per-body W-local arrays and the multipliers, and back."""
 
     def __init__(self, problem):
-        self.problem = problem
-        self.system = isinstance(getattr(problem, "bodies", None), dict)
-        if self.system:
-            problem.build()
+        self.problem = problem.build()
+        self.layout = problem.layout
 
     def current(self):
-        if not self.system:
-            return self.problem.x0.x.array
-        return self.problem.assembler.X0.getArray(readonly=True)
+        return self.problem.X0.getArray(readonly=True)
 
     def split(self, vec):
         """(body arrays, multipliers owned here) of a state vector `vec` in the loop's layout."""
-        if not self.system:
-            return {"": np.asarray(vec)}, np.zeros(0)
-        A = self.problem.assembler
-        out = {}
+        out, off = {}, self.layout.offsets
         for i, (bname, body) in enumerate(_bodies(self.problem)):
             full = np.zeros_like(body.x0.x.array)
-            full[: A.sizes[i]] = vec[A.offsets[i]:A.offsets[i + 1]]
+            full[: off[i + 1] - off[i]] = vec[off[i]:off[i + 1]]
             out[bname] = full
-        lam = np.asarray(vec[A.offsets[len(A.bodies)]:]) if self.problem.lam_space is not None else np.zeros(0)
-        return out, lam
+        return out, np.asarray(vec[off[-2]:off[-1]])
 
     def join(self, arrays, lam):
-        """A state vector in the loop's layout (ghosts updated for a Problem)."""
-        if not self.system:
-            from dolfinx import fem
-            u = fem.Function(self.problem.space.V)
-            u.x.array[:] = arrays[""]
-            u.x.scatter_forward()
-            return u.x.array.copy()
-        A = self.problem.assembler
-        vec = np.zeros(A.offsets[-1])
+        """A state vector in the loop's layout."""
+        off = self.layout.offsets
+        vec = np.zeros(off[-1])
         for i, (bname, body) in enumerate(_bodies(self.problem)):
-            vec[A.offsets[i]:A.offsets[i + 1]] = arrays[bname][: A.sizes[i]]
+            vec[off[i]:off[i + 1]] = arrays[bname][: off[i + 1] - off[i]]
         if len(lam):
-            vec[A.offsets[len(A.bodies)]:] = lam
+            vec[off[-2]:off[-1]] = lam
         return vec
 
 
@@ -185,8 +176,6 @@ class Saver:
         self.every, self.n_steps = int(every), n_steps
         self.layout = _Layout(problem)
         self.comm = problem.comm
-        if self.comm.size > 1:
-            deterministic_solver(problem)
 
     def __call__(self, n, previous, H, supplied, dissipated=0.0):
         if n % self.every:
@@ -197,7 +186,7 @@ class Saver:
         fresh_newton(self.problem)
         if n != self.n_steps:   # how far it got, if it is killed now
             from rodfem.io.output import write_json
-            status = {"scene": self.scene, "status": "running", "steps": n, "t": n * float(self.problem.h.value),
+            status = {"scene": self.scene, "status": "running", "steps": n, "t": n * self.problem.dt,
                       "n_steps": self.n_steps, "checkpoint": {"step": n, "file": NAME},
                       "resume": f"rodfem run --resume {self.out}", "parameters": self.params,
                       "mpi_ranks": self.comm.size, "pid": os.getpid()}
@@ -206,9 +195,9 @@ class Saver:
 
 def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
     """Write the checkpoint of step n into `out` (an OutDir or a directory path; collective)."""
-    from rodfem import __version__
+    from rodfem._version import __version__
     comm = problem.comm
-    dt = float(problem.h.value)
+    dt = problem.dt
     arrays, lam = layout.split(layout.current())
     data = {"x": _pack(problem, arrays, comm), "x_lam": _gather_lam(comm, lam)}
     if previous is not None:
@@ -239,25 +228,6 @@ def _write(out, info, data):
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)
-
-
-def deterministic_solver(problem):
-    """Under MPI, factor with SuperLU on every rank (PCREDUNDANT) instead of MUMPS, unless the user
-    chose the preconditioner (-rodfem_pc_type): MUMPS's parallel factorization is not bitwise
-    reproducible from run to run (its dynamic scheduling; measured: 1 of 4 identical
-    `mpirun -n 2` four-bar runs differed in the last bit at step 3), so a resumed run could not
-    repeat the uninterrupted one.  Each rank then factors the whole matrix: cheap at rod sizes."""
-    from petsc4py import PETSc
-    nw = problem.newton
-    opts = PETSc.Options()
-    if opts.hasName(nw.prefix + "pc_type"):
-        return
-    nw.settings["pc_type"] = "redundant"
-    # the inner solver reads its options when it is set up (at the first solve): they stay
-    for key, value in (("redundant_pc_type", "lu"), ("redundant_pc_factor_mat_solver_type", "superlu")):
-        if not opts.hasName(nw.prefix + key):
-            opts[nw.prefix + key] = value
-    fresh_newton(problem)
 
 
 def fresh_newton(problem):
@@ -294,7 +264,7 @@ def read(directory):
 
 def check(meta, directory, scene_name=None):
     """Refuse a checkpoint of another format, rodfem version or scene (one line)."""
-    from rodfem import __version__
+    from rodfem._version import __version__
     if meta.get("format") != FORMAT or meta.get("rodfem_version") != __version__:
         raise ParameterError(f"the checkpoint in {directory} was written by rodfem "
                              f"{meta.get('rodfem_version', '?')} (format {meta.get('format', '?')}); this is "
@@ -321,24 +291,14 @@ def restore(problem, meta, arrays):
         bodies, lam = layout.split(layout.current())
         _unpack(problem, _fields(arrays, which), bodies)
         lam_all = arrays.get(f"{which}:lam", np.zeros(0))
-        if layout.system and problem.lam_space is not None:
-            A = problem.assembler
-            n_own = A.sizes[len(A.bodies)]
-            start = problem.lam_space.dofmap.index_map.local_range[0] * problem.lam_space.dofmap.index_map_bs
-            lam = np.asarray(lam_all[start:start + n_own], dtype=float)
+        lam = np.asarray(lam_all[: layout.layout.sizes[-1]], dtype=float)   # all on rank 0
         return layout.join(bodies, lam)
 
     x = vector("x")
     previous = vector("previous") if meta.get("has_previous") else None
-    if layout.system:
-        A = problem.assembler
-        A.X0.getArray()[:] = x
-        A.X0.copy(A.X1)
-        A.push(A.X0, "x0")
-        A.push(A.X1, "x1")
-    else:
-        problem.x0.x.array[:] = x
-        problem.x1.x.array[:] = x
+    X = problem.layout.create_vector()
+    X.getArray()[:] = x
+    problem.set_state(X)
     solver = meta.get("linear_solver")    # a switch after a zero pivot (same number of ranks only)
     if solver in LU_CHAIN and meta.get("mpi_ranks") == comm.size and solver != lu_name(problem.newton.settings):
         problem.newton.use_lu(solver)

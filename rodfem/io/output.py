@@ -36,9 +36,9 @@ from contextlib import contextmanager, suppress
 
 import numpy as np
 
+from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
 from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
-from rodfem.errors import InputError, agreed
 from rodfem.io.frames import centreline, describe, surface
 from rodfem.io.snapshot import BodyView
 from rodfem.io.vtk import write_pvd, write_vtp
@@ -157,12 +157,6 @@ def frame_levels(n_steps, frames):
     return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
 
 
-def bodies_of(problem):
-    """[(name, body)]: the bodies of a System, or the single body of a Problem."""
-    refs = getattr(problem, "bodies", None)
-    return [(name, ref.body) for name, ref in refs.items()] if refs else [("", problem)]
-
-
 class RunWriter:
     """Writes a run into a claimed OutDir: history rows, frames (centreline, surface), and at the end
     summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
@@ -170,7 +164,7 @@ class RunWriter:
     def __init__(self, out, problem, n_steps, frames=100, section=0.0):
         self.out, self.problem = out, problem
         self.levels = frame_levels(n_steps, frames)
-        self.views = [BodyView(name, body) for name, body in bodies_of(problem)]
+        self.views = [BodyView(name, body) for name, body in problem.body_items()]
         self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
         self.dim = max(v.dim for v in self.views)
@@ -269,7 +263,8 @@ def summarize(scene_name, params, problem, result, status="completed", failure=N
         "scene": scene_name, "status": status, "failure": failure, "parameters": params,
         "dolfinx_version": compat.dolfinx_version, "integrator": problem.integrator,
         "elements": problem.describe_elements(), "n_elements": problem.n_elements, "dofs": problem.dofs,
-        "mpi_ranks": problem.comm.size, "linear_solver": problem.newton.linear_solver, "steps": result.steps, "wall_time_s": result.wall_time,
+        "mpi_ranks": problem.comm.size, "linear_solver": problem.newton.linear_solver, "steps": result.steps,
+        "wall_time_s": result.wall_time,
         "time_per_step_ms": 1e3 * result.wall_time / max(result.steps, 1),
         "newton_its_mean": float(its.mean()), "newton_its_max": int(its.max()),
         "max_balance_error": result.max_balance_error,

@@ -54,7 +54,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rodfem.la import petsc_raw
+from rodfem.fem import petsc_raw
 from rodfem.la.partial_lu import PartialLU
 
 INTERIOR_SOLVERS = ("rcm", "nd", "amd", "superlu", "mumps")   # rcm, nd, amd: rodfem/la/partial_lu.py, that order
@@ -321,7 +321,7 @@ class InterfaceSchur:
         pc.setType("lu")
         pc.setFactorSolverType(self.solver)
         if self.solver == "mumps":   # sequential MUMPS on this rank's block
-            from rodfem.nls.newton import mumps_options
+            from rodfem.la.lu_chain import mumps_options
             prefix = "rodfem_schur_local_"
             mumps_options(prefix)
             self.ksp.setOptionsPrefix(prefix)

@@ -18,16 +18,13 @@ from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``; MUMPS in parallel:
 ``-rodfem_pc_type lu -rodfem_pc_factor_mat_solver_type mumps``).
 """
-import os
-import re
 import time
 from dataclasses import dataclass
 
-from dolfinx.fem import petsc as fpetsc
 from petsc4py import PETSc
 
-from rodfem.fem import compat
-from rodfem.errors import InputError
+from rodfem.errors import NewtonFailure, petsc_error
+from rodfem.la.lu_chain import LU_CHAIN, PIVOTING, lu_name, mumps_options, next_lu
 
 # Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
 # round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
@@ -51,69 +48,6 @@ PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSch
 # full Newton.
 LARGE = 10_000
 LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
-# The LUs to try, in order, each after the previous one met a zero pivot (name: PETSc options).
-# PETSc's own LU does not pivot: in RCM order a multiplier (the 3D rod's collocated constraints,
-# joints) is a zero pivot.  Next comes the partial LU of rodfem/la/partial_lu.py (the parallel
-# solver's, here with no interface), which orders the multipliers after the dofs they constrain:
-# on the 3D rod's Jacobian (1024 elements, 73,758 unknowns, only its possible nonzeros:
-# rodfem/fem/fastassembly.py) it factors in 27 ms and solves in 1.9 ms (in AMD order, the least fill of
-# the orders it tries); PETSc's LU in AMD order meets
-# a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
-# -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
-# Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
-# LU reached that way that then fails Newton (a small pivot, not a zero one) hands over to the
-# next LU too.  SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4
-# elements, 1e8 nonzeros: "Not enough memory", and destroying that failed factor crashes): above
-# SUPERLU_NONZEROS MUMPS comes straight after.
-LU_CHAIN = {"petsc": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
-            "schur": {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSchur"},
-            "petsc-amd": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
-            "superlu": {"pc_type": "lu", "pc_factor_mat_solver_type": "superlu"},
-            "mumps": {"pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}}
-PIVOTING = ("superlu", "mumps")
-SUPERLU_NONZEROS = 4e7
-
-
-def lu_name(settings):
-    """The LU_CHAIN name of the LU that `settings` select."""
-    if settings.get("pc_type") == "python":
-        return "schur"
-    solver = settings.get("pc_factor_mat_solver_type", "petsc")
-    if solver == "petsc" and settings.get("pc_factor_mat_ordering_type", "rcm") == "amd":
-        return "petsc-amd"
-    return solver
-
-
-def next_lu(A, failed):
-    """The LU to use after `failed` met a zero pivot on A (sequential AIJ or the local block of a
-    rank), or None when there is none left."""
-    names = list(LU_CHAIN)
-    if failed not in names or failed == names[-1]:
-        return None
-    following = names[names.index(failed) + 1]
-    if following == "superlu" and A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"] > SUPERLU_NONZEROS:
-        following = "mumps"
-    return following
-
-
-def mumps_options(prefix):
-    """MUMPS with AMD ordering and 4x its workspace estimate (its default METIS ordering and
-    workspace failed on these chains at 10^4 elements), unless the user chose otherwise."""
-    opts = PETSc.Options()
-    for key, value in (("mat_mumps_icntl_7", 0), ("mat_mumps_icntl_14", 300)):
-        if not opts.hasName(prefix + key):
-            opts[prefix + key] = value
-
-
-class NewtonFailure(RuntimeError):
-    """Newton did not converge in a time step."""
-
-    def __init__(self, step, t, residual, iterations, reason):
-        self.step, self.t, self.residual, self.iterations, self.reason = step, t, residual, iterations, reason
-        super().__init__(f"Newton failed at step {step} (t = {t:.6g}): residual {residual:.3e} "
-                         f"after {iterations} iterations ({reason})")
-
-
 @dataclass
 class Solve:
     iterations: int
@@ -123,69 +57,18 @@ class Solve:
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
 
 
-def petsc_error(error, what):
-    """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
-    what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""
-    lines = [ln.strip() for ln in str(error).splitlines() if ln.strip()]
-    reason = re.sub(r"^\[\d+\]\s*", "", lines[-1]) if lines else str(error)
-    options = f" (PETSC_OPTIONS={os.environ['PETSC_OPTIONS']!r})" if os.environ.get("PETSC_OPTIONS") else ""
-    return InputError(f"{what}{options}: {reason}; rodfem's solver options have the prefix -rodfem_, "
-                      f"e.g. -rodfem_snes_max_it 50")
-
-
-class FormAssembler:
-    """F(x) and J(x) of one mixed space: compiled forms F, J, the state Function x, Dirichlet bcs.
-
-    The Jacobian goes through rodfem/fem/fastassembly.py (the same matrix, 5-10x faster than
-    DOLFINx's MatSetValues) when the form qualifies; `fast=False` keeps DOLFINx's assembly."""
-
-    def __init__(self, F, J, x, bcs, fast=True):
-        self.F, self.J, self.x, self.bcs = F, J, x, bcs
-        self.comm = x.function_space.mesh.comm
-        self.vector = compat.petsc_vec(x)   # the unknown, as the PETSc vector Newton iterates on
-        self.fast = None
-        if fast:
-            from rodfem.fem.fastassembly import FastJacobian
-            if FastJacobian.usable(J):
-                self.fast = FastJacobian(J, bcs)
-
-    def create_vector(self):
-        return compat.create_vector(self.F)
-
-    def create_matrix(self):
-        return self.fast.create_matrix() if self.fast else fpetsc.create_matrix(self.J)
-
-    def update(self, xin):
-        """Make the forms see the iterate xin (copied into x, ghosts updated)."""
-        xin.copy(self.vector)
-        self.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-
-    def residual(self, xin, b):
-        self.update(xin)
-        with b.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector(b, self.F)
-        if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
-            fpetsc.apply_lifting(b, [self.J], bcs=[self.bcs], x0=[self.vector], scale=-1.0)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if self.bcs:
-            fpetsc.set_bc(b, self.bcs, self.vector, -1.0)
-
-    def jacobian(self, xin, A):
-        if self.fast:
-            self.fast.assemble(A)
-            return
-        A.zeroEntries()
-        fpetsc.assemble_matrix(A, self.J, bcs=self.bcs)
-        A.assemble()
-
-
 class Newton:
-    """Solves F(x) = 0 for the Function `x` (F, J compiled forms, bcs Dirichlet conditions),
-    or, with `assembler=`, for any unknown an assembler provides (a system of bodies)."""
+    """Solves F(X) = 0 for the unknown of `assembler` (rodfem/fem/assembly.py: a system of
+    bodies), or for the Function `x` of the compiled forms F, J = dF/dx with Dirichlet
+    conditions bcs (one block)."""
 
     def __init__(self, F=None, J=None, x=None, bcs=(), options=None, prefix="rodfem_", assembler=None):
-        self.assembler = assembler or FormAssembler(F, J, x, list(bcs))
+        self.standalone = assembler is None   # a form of its own: x is the state between solves
+        if assembler is None:
+            from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock
+            assembler = BlockAssembler(BlockLayout(x.function_space.mesh.comm, [x.function_space]),
+                                       [BodyBlock(F, J, x, bcs)])
+        self.assembler = assembler
         comm = self.assembler.comm
         self.b = self.assembler.create_vector()
         self.A = self.assembler.create_matrix()
@@ -255,7 +138,7 @@ class Newton:
         pc.reset()
         pc.setType(LU_CHAIN[name]["pc_type"])
         if name == "schur":
-            from rodfem.la import petsc_raw
+            from rodfem.fem import petsc_raw
             pc.setPythonType(LU_CHAIN[name]["pc_python_type"])
             petsc_raw.pc_set_failed(pc, False)
             return
@@ -269,6 +152,8 @@ class Newton:
         A chord Newton (``snes_lag_jacobian`` > 1: the Jacobian and its LU reused over
         iterations) that fails repeats the step with a fresh Jacobian every iteration.
         """
+        if self.standalone:
+            self.assembler.pull()
         self.xv.copy(self._start)  # the initial guess (the callbacks overwrite x with each iterate)
         return self._solve(step, t)
 

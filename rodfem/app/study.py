@@ -55,10 +55,10 @@ import os
 import numpy as np
 from mpi4py import MPI
 
-from rodfem.nls.newton import NewtonFailure
-from rodfem.io.output import OutDir, write_json
-from rodfem.app.scene import ParameterError, Scene, load
 from rodfem.analysis.timeloop import steps_for
+from rodfem.app.scene import Scene, load
+from rodfem.errors import NewtonFailure, ParameterError
+from rodfem.io.output import OutDir, write_json
 
 REF_FACTOR = 4
 DEFAULT_LEVELS = 4

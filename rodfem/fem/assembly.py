@@ -1,0 +1,239 @@
+"""Residual and Jacobian of a system of bodies on one block vector X = (x_1, ..., x_k, lambda).
+
+Each body i has its own mesh, mixed space and compiled forms F_i, J_i; the unknown of a time
+step (or of a static solve) is the block vector of all bodies' owned dofs followed by the
+multipliers of the couplings between them (joints, all owned by rank 0).  This module knows
+no joint: a `Coupling` (rodfem/core/system.py) gives its rows, columns and values in global
+block indices.
+
+    layout    = BlockLayout(comm, [V_1, ..., V_k], n_multipliers)
+    assembler = BlockAssembler(layout, [BodyBlock(F_i, J_i, x_i, bcs_i) ...], coupling)
+    Newton(assembler)                       # rodfem/nls/newton.py
+
+Every body's Jacobian block goes through rodfem/fem/fastassembly.py (FFCx's element kernels
+added straight into the CSR arrays of the one PETSc matrix, only the entries that can be
+nonzero); a form it cannot take (64-bit PETSc indices, dof transformations) is assembled by
+DOLFINx into a matrix of its own and copied into the block.  The matrix holds, from the start,
+every body's entries, the couplings' entries and the whole diagonal (zero for multipliers).
+"""
+import numpy as np
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from rodfem.fem import compat
+from rodfem.fem.fastassembly import FastJacobian
+
+
+class BlockLayout:
+    """Where each block's owned dofs sit in the rank's part of X: block i (a body) at
+    offsets[i]:offsets[i+1], then the multipliers (all on rank 0).  Global index of local
+    position p: start + p."""
+
+    def __init__(self, comm, spaces, n_multipliers=0):
+        self.comm, self.spaces = comm, list(spaces)
+        self.n_multipliers = int(n_multipliers)
+        sizes = [V.dofmap.index_map.size_local * V.dofmap.index_map_bs for V in self.spaces]
+        sizes.append(self.n_multipliers if comm.rank == 0 else 0)
+        self.sizes = np.array(sizes, dtype=np.int64)
+        self.offsets = np.concatenate([[0], np.cumsum(self.sizes)])
+        self.all_sizes = np.array(comm.allgather(self.sizes))                 # [rank, block]
+        self.ranges = np.concatenate([[0], np.cumsum(self.all_sizes.sum(axis=1))])
+        self.start = int(self.ranges[comm.rank])
+        self.size_local, self.size_global = int(self.offsets[-1]), int(self.ranges[-1])
+        self.multipliers = int(self.all_sizes[0, :-1].sum()) + np.arange(self.n_multipliers)   # global indices
+
+    def local_to_global(self, i):
+        """Global indices of block i's local dofs (owned, then ghosts, as in its Function)."""
+        V = self.spaces[i]
+        imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+        owned = self.start + self.offsets[i] + np.arange(self.sizes[i])
+        ghosts, owners = np.asarray(imap.ghosts, dtype=np.int64), np.asarray(imap.owners, dtype=np.int64)
+        starts = np.array(self.comm.allgather(imap.local_range[0]), dtype=np.int64)
+        block_start = self.ranges[:-1] + self.all_sizes[:, :i].sum(axis=1)           # per rank
+        base = block_start[owners] + (ghosts - starts[owners]) * bs
+        return np.concatenate([owned, (base[:, None] + np.arange(bs)[None, :]).ravel()]).astype(np.int64)
+
+    def owner(self, rows):
+        """The rank owning each global row."""
+        return np.searchsorted(self.ranges, rows, side="right") - 1
+
+    def create_vector(self):
+        return PETSc.Vec().createMPI((self.size_local, self.size_global), comm=self.comm)
+
+    def create_matrix(self, entries):
+        """An AIJ matrix with the (rows, cols) pairs of `entries` (global; a rank may list rows of
+        another) and the whole diagonal; new entries may still be inserted later."""
+        N = self.size_global
+        keys = [np.asarray(r, np.int64) * N + np.asarray(c, np.int64) for r, c in entries]
+        key = np.concatenate(keys) if keys else np.zeros(0, np.int64)
+        if self.comm.size > 1:   # the entries of other ranks' rows go to their owners
+            owner = self.owner(key // N)
+            key = np.concatenate(self.comm.alltoall([key[owner == p] for p in range(self.comm.size)]))
+        diagonal = self.start + np.arange(self.size_local, dtype=np.int64)
+        key = np.unique(np.concatenate([key, diagonal * N + diagonal]))
+        rows, cols = np.divmod(key, N)
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows - self.start, minlength=self.size_local))])
+        A = PETSc.Mat().createAIJ(((self.size_local, N), (self.size_local, N)),
+                                  csr=(indptr.astype(PETSc.IntType), cols.astype(PETSc.IntType)), comm=self.comm)
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)   # the pattern may grow
+        A.assemble()
+        return A
+
+
+class BodyBlock:
+    """One body's rows of the system: compiled residual F and Jacobian J = dF/dx of its state
+    Function x (x_{n+1}), its Dirichlet conditions bcs (rows replaced by x - x_D = 0)."""
+
+    def __init__(self, F, J, x, bcs):
+        self.F, self.J, self.x, self.bcs = F, J, x, list(bcs)
+        self.vec = compat.petsc_vec(x)
+        self.b = compat.create_vector(F)
+        self.fast = FastJacobian(J, self.bcs) if FastJacobian.usable(J) else None
+
+    def place(self, layout, i):
+        self.layout, self.i = layout, i
+        self.lo, self.hi = int(layout.offsets[i]), int(layout.offsets[i + 1])
+        self.l2g = layout.local_to_global(i)
+
+    def entries(self):
+        """(rows, cols), global, of the entries the block can have."""
+        if self.fast:
+            r, c = self.fast.entries()
+            return self.l2g[r], self.l2g[c]
+        self._own = fpetsc.create_matrix(self.J)     # DOLFINx's assembly into a matrix of its own
+        fpetsc.assemble_matrix(self._own, self.J, bcs=self.bcs)
+        self._own.assemble()
+        indptr, cols, _ = self._own.getValuesCSR()
+        imap, bs = self.x.function_space.dofmap.index_map, self.x.function_space.dofmap.index_map_bs
+        nodes = imap.local_to_global(np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32))
+        body_global = (np.asarray(nodes, np.int64)[:, None] * bs + np.arange(bs)[None, :]).ravel()
+        order = np.argsort(body_global)
+        self._column = lambda g: self.l2g[order[np.searchsorted(body_global[order], g)]]
+        rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+        return self.l2g[rows], self._column(cols)
+
+    def attach(self, A):
+        if self.fast:
+            self.fast.attach(A, self.lo, self.l2g)
+
+    # -- the state and the residual ---------------------------------------------------------
+    def set_state(self, X):
+        """x <- block i of the array X (the rank's part of the block vector), ghosts updated."""
+        self.x.x.array[: self.hi - self.lo] = X[self.lo:self.hi]
+        self.x.x.scatter_forward()
+
+    def residual(self, b):
+        """Block i of the array b <- F(x) (Dirichlet rows: x - x_D, as DOLFINx's lifting gives them)."""
+        with self.b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(self.b, self.F)
+        if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
+            fpetsc.apply_lifting(self.b, [self.J], bcs=[self.bcs], x0=[self.vec], scale=-1.0)
+        self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.bcs:
+            fpetsc.set_bc(self.b, self.bcs, self.vec, -1.0)
+        b[self.lo:self.hi] = self.b.array_r[: self.hi - self.lo]
+
+    # -- the Jacobian ----------------------------------------------------------------------------
+    def add_jacobian(self, A):
+        """Add J into its block of A (A zeroed before, assembled after by the caller); False when
+        the fast assembly ran out of room for its off-pattern entries (zero A and try again)."""
+        if self.fast:
+            return self.fast.add(A)
+        self._own.zeroEntries()
+        fpetsc.assemble_matrix(self._own, self.J, bcs=self.bcs)
+        self._own.assemble()
+        indptr, cols, vals = self._own.getValuesCSR()
+        gcols = self._column(cols)
+        for r in range(len(indptr) - 1):
+            a, e = indptr[r], indptr[r + 1]
+            A.setValues(self.l2g[r:r + 1].astype(PETSc.IntType), gcols[a:e].astype(PETSc.IntType), vals[a:e],
+                        addv=PETSc.InsertMode.ADD_VALUES)
+        return True
+
+    def restructure(self):
+        if self.fast:
+            self.fast.restructure()
+
+
+class BlockAssembler:
+    """F(X) and J(X) of the blocks and their coupling (see the module docstring).
+
+    coupling: None, or an object with ``entries()`` -> [(rows, cols)] global index arrays,
+    ``residual(X, b)`` and ``jacobian(X, A)`` adding its terms (global indices, any rank), and
+    ``update(X)`` called before either with the iterate.
+    """
+
+    def __init__(self, layout, blocks, coupling=None):
+        self.layout, self.blocks, self.coupling = layout, list(blocks), coupling
+        self.comm = layout.comm
+        for i, blk in enumerate(self.blocks):
+            blk.place(layout, i)
+        self.bcs = [bc for blk in self.blocks for bc in blk.bcs]
+        self.vector = layout.create_vector()    # the unknown X that Newton iterates on
+        entries = [blk.entries() for blk in self.blocks] + (coupling.entries() if coupling else [])
+        self.A = layout.create_matrix(entries)
+        for blk in self.blocks:
+            blk.attach(self.A)
+        self._state = self._nonzero_state(self.A)
+
+    def create_vector(self):
+        return self.layout.create_vector()
+
+    def create_matrix(self):
+        return self.A
+
+    def update(self, xin):
+        """Make the forms see the iterate xin (into X and every body's Function)."""
+        if xin.handle != self.vector.handle:
+            xin.copy(self.vector)
+        X = self.vector.getArray(readonly=True)
+        for blk in self.blocks:
+            blk.set_state(X)
+        if self.coupling:
+            self.coupling.update(self.vector)
+
+    def pull(self):
+        """X <- every block's Function (the reverse of `update`)."""
+        X = self.vector.getArray()
+        for blk in self.blocks:
+            X[blk.lo:blk.hi] = blk.x.x.array[: blk.hi - blk.lo]
+
+    def residual(self, xin, b):
+        self.update(xin)
+        arr = b.getArray()
+        arr[:] = 0.0
+        for blk in self.blocks:
+            blk.residual(arr)
+        del arr
+        if self.coupling:
+            self.coupling.residual(self.vector, b)
+            b.assemblyBegin()
+            b.assemblyEnd()
+
+    def jacobian(self, xin, A):
+        while True:
+            A.zeroEntries()
+            if all(blk.add_jacobian(A) for blk in self.blocks):
+                break
+        if self.coupling:
+            self.coupling.jacobian(self.vector, A)
+        A.assemble()
+        state = self._nonzero_state(A)
+        if state != self._state:   # an entry outside the pattern was inserted: re-read the structure
+            for blk in self.blocks:
+                blk.restructure()
+            self._state = state
+
+    @staticmethod
+    def _nonzero_state(A):
+        from rodfem.fem import petsc_raw
+        return petsc_raw.nonzero_state(A) if petsc_raw.usable() else 0
+
+
+def allreduce_max(comm, array):
+    """Elementwise maximum over the ranks (each entry known on the rank that owns it, -1 or -inf elsewhere)."""
+    array = np.ascontiguousarray(array, dtype=float if np.asarray(array).dtype.kind == "f" else np.int64)
+    comm.Allreduce(MPI.IN_PLACE, array, op=MPI.MAX)
+    return array

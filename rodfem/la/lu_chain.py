@@ -1,0 +1,60 @@
+"""The serial chain of direct solvers: the LU to use after another met a zero pivot.
+
+PETSc's own LU does not pivot; a saddle point (multipliers, zero densities in statics) makes it
+fail, and Newton (rodfem/nls/newton.py) switches once, for the rest of the run, to the next LU
+of `LU_CHAIN`; the parallel solver (rodfem/la/schur.py) runs the same chain inside the ranks.
+"""
+from petsc4py import PETSc
+
+# The LUs to try, in order, each after the previous one met a zero pivot (name: PETSc options).
+# PETSc's own LU does not pivot: in RCM order a multiplier (the 3D rod's collocated constraints,
+# joints) is a zero pivot.  Next comes the partial LU of rodfem/la/partial_lu.py (the parallel
+# solver's, here with no interface), which orders the multipliers after the dofs they constrain:
+# on the 3D rod's Jacobian (1024 elements, 73,758 unknowns, only its possible nonzeros:
+# rodfem/fem/fastassembly.py) it factors in 27 ms and solves in 1.9 ms (in AMD order, the least fill of
+# the orders it tries); PETSc's LU in AMD order meets
+# a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
+# -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
+# Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
+# LU reached that way that then fails Newton (a small pivot, not a zero one) hands over to the
+# next LU too.  SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4
+# elements, 1e8 nonzeros: "Not enough memory", and destroying that failed factor crashes): above
+# SUPERLU_NONZEROS MUMPS comes straight after.
+LU_CHAIN = {"petsc": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
+            "schur": {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSchur"},
+            "petsc-amd": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
+            "superlu": {"pc_type": "lu", "pc_factor_mat_solver_type": "superlu"},
+            "mumps": {"pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}}
+PIVOTING = ("superlu", "mumps")
+SUPERLU_NONZEROS = 4e7
+
+
+def lu_name(settings):
+    """The LU_CHAIN name of the LU that `settings` select."""
+    if settings.get("pc_type") == "python":
+        return "schur"
+    solver = settings.get("pc_factor_mat_solver_type", "petsc")
+    if solver == "petsc" and settings.get("pc_factor_mat_ordering_type", "rcm") == "amd":
+        return "petsc-amd"
+    return solver
+
+
+def next_lu(A, failed):
+    """The LU to use after `failed` met a zero pivot on A (sequential AIJ or the local block of a
+    rank), or None when there is none left."""
+    names = list(LU_CHAIN)
+    if failed not in names or failed == names[-1]:
+        return None
+    following = names[names.index(failed) + 1]
+    if following == "superlu" and A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"] > SUPERLU_NONZEROS:
+        following = "mumps"
+    return following
+
+
+def mumps_options(prefix):
+    """MUMPS with AMD ordering and 4x its workspace estimate (its default METIS ordering and
+    workspace failed on these chains at 10^4 elements), unless the user chose otherwise."""
+    opts = PETSc.Options()
+    for key, value in (("mat_mumps_icntl_7", 0), ("mat_mumps_icntl_14", 300)):
+        if not opts.hasName(prefix + key):
+            opts[prefix + key] = value
