@@ -482,7 +482,9 @@ class JointRows:
         for j in self.joints:
             v, q = j.v_index[j.rows], j.q_index[j.qcols]
             lam = j.lam_index
-            for r, c in ((v, q), (v, lam), (lam, q), (lam, v)):
+            # (lam, lam): zeros, but with them PETSc's LU in RCM order finds its pivots for the
+            # multipliers (without: a zero pivot and the slower LU of the chain's next stage)
+            for r, c in ((v, q), (v, lam), (lam, q), (lam, v), (lam, lam)):
                 R, C = np.meshgrid(r, c, indexing="ij")
                 out.append((R.ravel(), C.ravel()))
         return out
