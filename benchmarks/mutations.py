@@ -255,7 +255,10 @@ def copy_tree(dest, ref=None):
                            text=True).stdout.split("\0")
     for f in filter(None, files):
         src = os.path.join(REPO, f)
-        if os.path.isfile(src):
+        if os.path.islink(src):   # rodfem/forms -> ../forms, rodfem/demos -> ../demos
+            os.makedirs(os.path.dirname(os.path.join(dest, f)), exist_ok=True)
+            os.symlink(os.readlink(src), os.path.join(dest, f))
+        elif os.path.isfile(src):
             os.makedirs(os.path.dirname(os.path.join(dest, f)), exist_ok=True)
             shutil.copy2(src, os.path.join(dest, f))
 
