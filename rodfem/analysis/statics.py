@@ -245,14 +245,7 @@ class StaticJointRows(JointRows):
     rows g(q) - mu g_p(t) (the load factor mu scales a driven joint's motion)."""
     mu, t = 1.0, 0.0
 
-    def entries(self):
-        out = []
-        for j in self.joints:
-            v, q, lam = j.v_index[j.rows], j.q_index[j.qcols], j.lam_index
-            for r, c in ((v, q), (v, lam), (lam, q)):
-                R, C = np.meshgrid(r, c, indexing="ij")
-                out.append((R.ravel(), C.ravel()))
-        return out
+    PAIRS = (("v", "q"), ("v", "lam"), ("lam", "q"))
 
     def update(self, X):
         vals = self.points.values(X)

@@ -471,6 +471,8 @@ class JointRows:
     G(q_{n+1/2})^T lambda on the momentum rows and the velocity-level constraint rows
     (rodfem/core/joints.py, `Joint.step`), computed on rank 0 and added at global indices."""
 
+    PAIRS = (("v", "q"), ("v", "lam"), ("lam", "q"), ("lam", "v"), ("lam", "lam"))   # blocks it can fill
+
     def __init__(self, points):
         self.points, self.joints, self.comm = points, points.joints, points.comm
         self.work = 0.0
@@ -484,7 +486,8 @@ class JointRows:
             lam = j.lam_index
             # (lam, lam): zeros, but with them PETSc's LU in RCM order finds its pivots for the
             # multipliers (without: a zero pivot and the slower LU of the chain's next stage)
-            for r, c in ((v, q), (v, lam), (lam, q), (lam, v), (lam, lam)):
+            kinds = {"v": v, "q": q, "lam": lam}
+            for r, c in ((kinds[a], kinds[b]) for a, b in self.PAIRS):
                 R, C = np.meshgrid(r, c, indexing="ij")
                 out.append((R.ravel(), C.ravel()))
         return out
