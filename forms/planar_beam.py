@@ -18,7 +18,7 @@ Local PH equations (N = dW/dGamma, M = dW/dkappa, n = A N, S = [[0, -1], [1, 0]]
 Sign of S: with S = [[0, -1], [1, 0]] in *this* arrangement the model is
 objective; seed 002 writes omega A^T S d_s r with S = [[0, 1], [-1, 0]],
 which is the same.  (Flipping it still conserves energy but lets a rigidly
-spinning beam build up strain; tests/test_planar_beam.py catches that.)
+spinning beam build up strain; tests/models/test_planar_beam.py catches that.)
 
 Weak form: (r, phi, v, omega) in P_k, (Gamma, kappa) in DG_{k-1}; the balance
 rows are integrated by parts (the end terms are the ports), the strain rows

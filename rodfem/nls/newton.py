@@ -147,7 +147,7 @@ class Newton:
             pc.setFactorOrdering(LU_CHAIN[name]["pc_factor_mat_ordering_type"])
 
     def solve(self, step, t):
-        """Solve in place for x; raise NewtonFailure (never return a NaN state).
+        """Solve in place for x; raise NewtonFailure, x left at the initial guess (never a NaN state).
 
         A chord Newton (``snes_lag_jacobian`` > 1: the Jacobian and its LU reused over
         iterations) that fails repeats the step with a fresh Jacobian every iteration.
@@ -179,6 +179,7 @@ class Newton:
         if reason <= 0 or res != res:
             if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
                 return self._solve_full_newton(step, t)
+            self.assembler.update(self._start)   # x back to the initial guess, not the last iterate
             raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
         self.assembler.update(self._work)
         return Solve(its, res)

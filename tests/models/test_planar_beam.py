@@ -243,3 +243,15 @@ def test_roll_up_spatial_order_grows_with_the_degree(degree):
     d = np.linalg.norm(np.diff(tips, axis=0), axis=1)
     order = np.log2(d[0] / d[1])
     assert abs(order - 2 * degree) <= 0.3, (d, order)
+
+
+def test_material_parameter_checks():
+    import pytest
+    import ufl
+
+    from rodfem.forms.planar_beam import quadratic
+    with pytest.raises(ValueError, match="parameter EI must be a positive number"):
+        quadratic(EA=1.0, GA=1.0, EI=0.0)
+    quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=-0.5)                       # signed: any number
+    x = ufl.SpatialCoordinate(ufl.Mesh(ufl.VectorElement("Lagrange", ufl.interval, 1)))
+    quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=0.1 * x[0])                 # or a UFL expression

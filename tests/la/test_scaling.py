@@ -8,30 +8,17 @@
   both sweeps exactly (against dense linear algebra), in RCM and AMD order;
 - the serial LU chain: RCM, and the partial LU (multipliers last) after the 3D rod's zero pivot,
   SuperLU when every order of the partial LU meets one;
-- the fast assembly (rodfem/fem/fastassembly.py) gives DOLFINx's matrix entry for entry, keeps only
-  the possible nonzeros where they are few (the 3D rod), and inserts an entry its pattern missed.
 """
-import json
-import os
-import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
+from processes import assert_same_history, history, rodfem, serial_and_parallel, summary
 
 from rodfem import run
 from rodfem.app.scene import load
 from rodfem.la.schur import InterfaceSchur, interface
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-BIN = os.path.dirname(sys.executable)
-
-
-def read_history(out):
-    return np.genfromtxt(out / "history.csv", delimiter=",", names=True)
 
 
 def built(scene, n, steps=2):
@@ -125,87 +112,6 @@ def test_partial_lu_leaves_the_schur_complement(method):
     assert lu.fill < 2.5   # RCM turned so that the interface side comes last: no fill outside the band
 
 
-def test_fast_assembly_is_dolfinx_assembly():
-    """The same matrix, entry for entry, for a beam with a clamped end (Dirichlet rows) and a 3D rod
-    (a body-fixed end moment: an exterior-facet integral in the Jacobian).  The rod's matrix holds
-    only its possible nonzeros (at most a third of DOLFINx's element pattern); the beam's is DOLFINx's."""
-    from dolfinx.fem import petsc as fpetsc
-    for scene, n in (("cantilever-2d", 12), ("flying-spaghetti-3d", 6)):
-        problem = built(scene, n, steps=1)
-        nw = problem.newton
-        assert nw.assembler.blocks[0].fast is not None
-        nw.assembler.jacobian(nw.xv, nw.A)
-        B = fpetsc.create_matrix(problem.J)
-        fpetsc.assemble_matrix(B, problem.J, bcs=nw.bcs)
-        B.assemble()
-        C = B.copy()
-        C.axpy(-1.0, nw.A, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-        assert C.norm() == 0.0 and B.norm() > 0, scene
-        kept, full = nw.A.getInfo()["nz_used"], B.getInfo()["nz_used"]
-        assert (kept <= full / 3) if scene.endswith("3d") else (kept == full), (scene, kept, full)
-
-
-def test_fast_assembly_inserts_an_entry_outside_its_pattern():
-    """An entry that is zero at the initial and the random states (a conditional that holds only
-    for w > 1e6) but not later: the pattern grows by it, and the matrix is still DOLFINx's."""
-    import ufl
-    from dolfinx import fem
-    from dolfinx import mesh as dmesh
-    from dolfinx.fem import petsc as fpetsc
-
-    from rodfem.fem import compat
-    from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock
-    mesh = dmesh.create_interval(MPI.COMM_WORLD, 8, [0.0, 1.0])
-    P1 = ufl.FiniteElement("P", mesh.ufl_cell(), 1)
-    V = fem.FunctionSpace(mesh, ufl.MixedElement([P1] * 4))
-    u, v = ufl.TrialFunctions(V), ufl.TestFunctions(V)
-    w = fem.Function(fem.FunctionSpace(mesh, P1))
-    a = sum(u[i] * v[i] for i in range(4)) * ufl.dx + ufl.conditional(ufl.gt(w, 1e6), w, 0.0) * u[1] * v[0] * ufl.dx
-    J = compat.form(a)
-    x = fem.Function(V)
-    F = compat.form(sum(x[i] * v[i] for i in range(4)) * ufl.dx)
-    assembler = BlockAssembler(BlockLayout(mesh.comm, [V]), [BodyBlock(F, J, x, [])])
-    assert assembler.blocks[0].fast is not None
-    A = assembler.create_matrix()
-    before = A.getInfo()["nz_used"]
-    w.x.array[:] = 1e7
-    assembler.jacobian(assembler.vector, A)
-    B = fpetsc.create_matrix(J)
-    fpetsc.assemble_matrix(B, J)
-    B.assemble()
-    C = B.copy()
-    C.axpy(-1.0, A, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-    assert C.norm() == 0.0 and B.norm() > 1e6
-    assert A.getInfo()["nz_used"] > before   # the coupling u_1 -> v_0 was inserted
-    assembler.jacobian(assembler.vector, A)   # and the next assembly uses the grown pattern
-    C = B.copy()
-    C.axpy(-1.0, A, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-    assert C.norm() == 0.0
-
-
-def test_linear_time_collapse_is_dolfinx_collapse():
-    """StateSpace.collapse (built from the field's element, linear in n) puts every field where
-    DOLFINx's quadratic collapse does: the same dofs of W, the same interpolated values."""
-    from dolfinx import fem
-    from dolfinx import mesh as dmesh
-
-    from rodfem.core.spaces import StateSpace
-    from rodfem.forms.cosserat_rod import CosseratRod
-    from rodfem.forms.planar_beam import PlanarBeam, quadratic
-    for model in (PlanarBeam(1.0, 1.0, quadratic(1.0, 1.0, 1.0), degree=2),
-                  CosseratRod(1.0, [1.0, 1.0, 1.0], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0])):
-        S = StateSpace(dmesh.create_interval(MPI.COMM_WORLD, 17, [0.0, 2.0]), model.fields)
-        for f in S.fields:
-            def value(x, f=f):
-                return np.array([np.sin(3 * x[0] + k) for k in range(f.size)]) if f.shape else np.sin(3 * x[0])
-            got, want = fem.Function(S.V), fem.Function(S.V)
-            for u, (Vi, dofs) in ((got, S.collapse(f.name)), (want, S.sub(f.name).collapse())):
-                fi = fem.Function(Vi)
-                fi.interpolate(value)
-                u.x.array[dofs] = fi.x.array
-            assert np.array_equal(got.x.array, want.x.array), f.name
-
-
 @pytest.mark.parametrize("scene, n, lu", [("flying-spaghetti-2d", 200, "petsc"), ("flying-spaghetti-3d", 12, "schur(rcm)")])
 def test_serial_lu_chain(scene, n, lu):
     """The serial LU: PETSc's in RCM order for the beam; for the 3D rod, whose multipliers are zero
@@ -237,53 +143,33 @@ def test_serial_lu_chain_on_harder_saddle_points(scene, values, lu):
     assert relative_residual(nw.A, nw.snes.getKSP().solve, b) <= 1e-11
 
 
-def rodfem_mpi(args, np_, timeout=240):
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe",
-           "-n", str(np_), os.path.join(BIN, "rodfem"), *args]
-    return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout + 30)
-
-
-def serial_and_parallel(rodfem, tmp_path, args, np_):
-    """Histories of the same run in serial and under mpirun -n np_ (both must succeed; they must
-    agree to 1e-8 of each column's scale), and the parallel run's summary."""
-    serial, par = tmp_path / "np1", tmp_path / f"np{np_}"
-    s = rodfem(*args, "--out", str(serial))
-    assert s.returncode == 0, s.stderr[-2000:]
-    p = rodfem_mpi([*args, "--out", str(par)], np_)
-    assert p.returncode == 0, p.stderr[-2000:]
-    a, b = read_history(serial), read_history(par)
-    for col in a.dtype.names:
-        scale = max(np.max(np.abs(a[col])), 1.0)
-        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
-    return a, b, json.loads((par / "summary.json").read_text())
-
-
 @pytest.mark.mpi
-def test_mpi_two_ranks_at_ten_thousand_elements(rodfem, tmp_path):
+def test_mpi_two_ranks_at_ten_thousand_elements(tmp_path):
     """10^4 planar elements, 3 steps: mpirun -n 2 converges and equals serial to 1e-8 (it failed
     at step 1 with MUMPS); the summary names the parallel solver."""
     args = ["run", "flying-spaghetti-2d", "--set", "n_elements=10000", "--set", "t_end=0.3",
             "--set", "frames=2", "--quiet"]
-    a, b, summary = serial_and_parallel(rodfem, tmp_path, args, 2)
-    assert summary["mpi_ranks"] == 2 and summary["linear_solver"] == "schur(rcm)"
+    a, b, par = serial_and_parallel(tmp_path, args, timeout=240)
+    assert_same_history(a, b, 1e-8)
+    assert par["linear_solver"] == "schur(rcm)"
     assert len(b["t"]) == 4
     assert np.array_equal(a["newton_its"], b["newton_its"])
     assert np.max(np.abs(b["balance_error"])) <= 1e-12 * np.max(np.abs(b["H"]))
 
 
 @pytest.mark.mpi
-def test_mpi_three_ranks_3d_rod_matches_serial(rodfem, tmp_path):
+def test_mpi_three_ranks_3d_rod_matches_serial(tmp_path):
     """Three ranks (two interfaces; the multipliers ordered last inside the ranks, those of an
     interface node on the interface) give the serial history of the 3D rod."""
     args = ["run", "flying-spaghetti-3d", "--set", "n_elements=12", "--set", "t_end=0.5",
             "--set", "frames=2", "--quiet"]
-    _, _, summary = serial_and_parallel(rodfem, tmp_path, args, 3)
-    assert summary["linear_solver"] == "schur(rcm)"
+    a, b, par = serial_and_parallel(tmp_path, args, np=3, timeout=240)
+    assert_same_history(a, b, 1e-8)
+    assert par["linear_solver"] == "schur(rcm)"
 
 
 @pytest.mark.mpi
-def test_mpi_step_retried_after_a_failed_chord_newton(rodfem, tmp_path):
+def test_mpi_step_retried_after_a_failed_chord_newton(tmp_path):
     """2000 planar elements (18,006 unknowns: the chord Newton of large systems) at dt = 1: steps
     that the chord Newton fails are repeated with full Newton, then from x_n (Newton's settings
     applied again made a new parallel solver context that PETSc did not set up: it crashed at step
@@ -292,13 +178,11 @@ def test_mpi_step_retried_after_a_failed_chord_newton(rodfem, tmp_path):
     args = ["run", "flying-spaghetti-2d", "--set", "n_elements=2000", "--set", "dt=1.0", "--set", "t_end=12",
             "--quiet"]
     s = rodfem(*args, "--out", str(tmp_path / "np1"))
-    p = rodfem_mpi([*args, "--out", str(tmp_path / "np2")], 2)
+    p = rodfem(*args, "--out", str(tmp_path / "np2"), np=2, timeout=240)
     assert s.returncode == 3 and p.returncode == 3, p.stderr[-2000:]
     for out in (s, p):
         assert "Newton failed at step 8 (t = 8)" in out.stderr
-    a, b = read_history(tmp_path / "np1"), read_history(tmp_path / "np2")
-    assert len(a["t"]) == len(b["t"]) == 8   # t = 0 .. 7
-    for col in a.dtype.names:
-        scale = max(np.max(np.abs(a[col])), 1.0)
-        assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
-    assert json.loads((tmp_path / "np2" / "summary.json").read_text())["status"] == "newton-failure"
+    a, b = history(tmp_path / "np1"), history(tmp_path / "np2")
+    assert len(a["t"]) == 8   # t = 0 .. 7
+    assert_same_history(a, b, 1e-8)
+    assert summary(tmp_path / "np2")["status"] == "newton-failure"

@@ -2,16 +2,13 @@
 
 Every run is small (4-16 elements): the machine is shared.
 """
-import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import ufl
 from dolfinx import fem
 from mpi4py import MPI
+from processes import serial_and_parallel
 
 from rodfem import run
 from rodfem.demos import flying_spaghetti_3d, helix_3d, roll_up_3d, whirling_rod_3d
@@ -390,13 +387,6 @@ def test_bad_parameters_one_line_errors():
 
 # -- serial vs 2 ranks ------------------------------------------------------------------------------
 
-def read_history(path):
-    import csv
-    with open(os.path.join(path, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
-
-
 @pytest.mark.mpi
 def test_serial_and_two_ranks_agree(tmp_path):
     """flying-spaghetti-3d (torsional variant, chord Newton) on 1 and 2 ranks: the whole histories agree.
@@ -406,14 +396,7 @@ def test_serial_and_two_ranks_agree(tmp_path):
     bound 1e-11 (the LU solvers differ: PETSc/SuperLU serial, MUMPS parallel)."""
     args = ["run", "flying-spaghetti-3d", "--set", "variant=spatial", "--set", "n_elements=6", "--set", "t_end=3",
             "--quiet"]
-    exe = os.path.join(os.path.dirname(sys.executable), "rodfem")
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    subprocess.run([exe, *args, "--out", str(tmp_path / "s")], check=True, env=env, capture_output=True)
-    subprocess.run(["mpirun", "--allow-run-as-root", "-n", "2", exe, *args, "--out", str(tmp_path / "p")],
-                   check=True, env=env, capture_output=True, timeout=600)
-    q = json.load(open(tmp_path / "p" / "summary.json"))
-    assert q["mpi_ranks"] == 2
-    a, b = read_history(tmp_path / "s"), read_history(tmp_path / "p")
+    a, b, _ = serial_and_parallel(tmp_path, args)
     assert list(a) == list(b) and len(a["t"]) == 31
     scale = {"H": np.max(np.abs(a["H"])), "tip": flying_spaghetti_3d.LENGTH,
              "p": max(np.max(np.abs(a[f"p_{c}"])) for c in "xyz"), "L": max(np.max(np.abs(a[f"L_{c}"])) for c in "xyz")}

@@ -9,6 +9,7 @@ mechanisms.
 import numpy as np
 import pytest
 from mpi4py import MPI
+from processes import assert_same_history, serial_and_parallel
 
 from rodfem import Load, Support, run
 from rodfem.app.scene import load
@@ -185,17 +186,10 @@ def test_bad_mechanism_from_the_cli_is_one_line(rodfem, tmp_path):
 
 
 @pytest.mark.mpi
-def test_four_bar_two_ranks_equal_serial(rodfem, tmp_path):
+def test_four_bar_two_ranks_equal_serial(tmp_path):
     """`mpirun -n 2` gives the serial history (measured: 1e-14 relative), every column."""
-    args = ["run", "four-bar-2d", "--set", "t_end=0.5", "--quiet"]
-    serial = rodfem(*args, "--out", str(tmp_path / "s"))
-    par = rodfem(*args, "--out", str(tmp_path / "p"), np=2)
-    assert serial.returncode == 0 and par.returncode == 0, par.stderr[-2000:]
-    a = np.genfromtxt(tmp_path / "s" / "history.csv", delimiter=",", names=True)
-    b = np.genfromtxt(tmp_path / "p" / "history.csv", delimiter=",", names=True)
-    assert a.dtype.names == b.dtype.names
-    for name in a.dtype.names:
-        assert np.max(np.abs(a[name] - b[name])) <= 1e-8 * max(np.max(np.abs(a[name])), 1.0), name
+    a, b, _ = serial_and_parallel(tmp_path, ["run", "four-bar-2d", "--set", "t_end=0.5", "--quiet"])
+    assert_same_history(a, b, 1e-8)
 
 
 def _const(v):

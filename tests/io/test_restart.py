@@ -1,7 +1,6 @@
 """Checkpoint and restart (rodfem/io/checkpoint.py): a resumed run repeats the uninterrupted one bit by
 bit (serial, chord Newton, a killed run, mpirun -n 2), a 2-rank checkpoint restarts on one
 process to round-off, and bad input is one line."""
-import csv
 import json
 import os
 import shutil
@@ -12,25 +11,14 @@ import time
 
 import numpy as np
 import pytest
-from conftest import BIN, REPO
+from processes import REPO, command, environment, history, ok
 
 from rodfem.app.cli import main
-
-
-def history(path):
-    with open(os.path.join(path, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
 
 def same_file(a, b):
     with open(os.path.join(a, "history.csv"), "rb") as fa, open(os.path.join(b, "history.csv"), "rb") as fb:
         return fa.read() == fb.read()
-
-
-def ok(p):
-    assert p.returncode == 0, p.stderr
-    return p
 
 
 @pytest.mark.parametrize("scene, args", [
@@ -52,16 +40,14 @@ def test_resumed_run_equals_the_uninterrupted_one(tmp_path, scene, args):
     assert s["steps"] == 10 and s["status"] == "completed"
 
 
-def test_a_killed_run_resumes_from_its_last_checkpoint(tmp_path):
+def test_a_killed_run_resumes_from_its_last_checkpoint(rodfem, tmp_path):
     """SIGKILL at some moment after the first checkpoint: summary.json says how far it got,
     history.csv has whole rows up to the kill, and --resume reproduces the full run."""
-    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env = environment()
     sets = ["--set", "dt=0.002", "--set", "t_end=10", "--set", "checkpoint_every=250", "--set", "frames=20"]
     full, killed = str(tmp_path / "full"), str(tmp_path / "killed")
-    rodfem = os.path.join(BIN, "rodfem")
-    subprocess.run([rodfem, "run", "flying-spaghetti-2d", *sets, "--quiet", "--out", full], env=env, cwd=REPO,
-                   check=True, capture_output=True, timeout=600)
-    p = subprocess.Popen([rodfem, "run", "flying-spaghetti-2d", *sets, "--quiet", "--out", killed], env=env,
+    ok(rodfem("run", "flying-spaghetti-2d", *sets, "--quiet", "--out", full))
+    p = subprocess.Popen([*command("run", "flying-spaghetti-2d", *sets, "--quiet", "--out", killed)], env=env,
                          cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
     while not os.path.exists(os.path.join(killed, "checkpoint.npz")) and time.time() - t0 < 300:
@@ -72,9 +58,7 @@ def test_a_killed_run_resumes_from_its_last_checkpoint(tmp_path):
     status = json.loads(open(os.path.join(killed, "summary.json")).read())
     assert status["status"] == "running", status          # killed before the end (5000 steps take ~3 s)
     assert status["steps"] % 250 == 0 and 0 < status["checkpoint"]["step"] == status["steps"] < 5000
-    r = subprocess.run([rodfem, "run", "--resume", killed, "--quiet"], env=env, cwd=REPO, capture_output=True,
-                       text=True, timeout=600)
-    assert r.returncode == 0, r.stderr
+    ok(rodfem("run", "--resume", killed, "--quiet"))
     assert same_file(full, killed)
 
 

@@ -6,14 +6,11 @@ derived there and checked against an independent strong-form shooting
 solution), the exact discrete balance of the ports, and bit-for-bit
 equality with the unactuated rod.  Every run is small (4-16 elements).
 """
-import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from mpi4py import MPI
+from processes import ok, rodfem, summary
 
 from rodfem import Load, Problem, Support, run
 from rodfem.demos import soft_arm_pneumatic, soft_arm_swing, tendon_arm
@@ -312,13 +309,9 @@ def test_cli_bad_input_one_line(rodfem):
 def test_serial_and_two_ranks_agree(tmp_path):
     """soft-arm-swing (chamber + tendon + gravity, dynamics), 6 elements, 40 steps: np 2 = serial."""
     args = ["run", "soft-arm-swing", "--set", "n_elements=6", "--set", "t_end=0.2", "--set", "t_on=0.05", "--quiet"]
-    exe = os.path.join(os.path.dirname(sys.executable), "rodfem")
-    env = dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
-    subprocess.run([exe, *args, "--out", str(tmp_path / "s")], check=True, env=env, capture_output=True, timeout=600)
-    subprocess.run(["timeout", "600", "mpirun", "--allow-run-as-root", "-n", "2", exe, *args,
-                    "--out", str(tmp_path / "p")], check=True, env=env, capture_output=True, timeout=660)
-    s, q = (json.load(open(tmp_path / d / "summary.json")) for d in ("s", "p"))
+    ok(rodfem(*args, "--out", tmp_path / "s"))
+    ok(rodfem(*args, "--out", tmp_path / "p", np=2))
+    s, q = summary(tmp_path / "s"), summary(tmp_path / "p")
     assert q["mpi_ranks"] == 2 and s["ports"] == ["chamber", "tendon", "gravity"]
     for k in ("H", "supplied", "tip_x", "tip_y", "tip_z", "volume_chamber", "length_tendon"):
         assert abs(s["final"][k] - q["final"][k]) <= 1e-9 * max(1e-3, abs(s["final"][k])), k

@@ -1,11 +1,10 @@
 """Generalized Maxwell viscoelasticity (forms/viscoelastic.py): the exact discrete dissipation
 balance, the standard-linear-solid formulas (relaxation, creep), the midpoint recurrence,
 the limits tau -> inf / tau -> 0 / zero stiffness, roll-up creep, stiff dashpots, MPI."""
-import csv
-import os
 
 import numpy as np
 import pytest
+from processes import serial_and_parallel
 
 from rodfem import Load, Problem, Support, run
 from rodfem.app.driver import run_scene
@@ -513,21 +512,11 @@ def test_stiff_and_slow_dashpots_run_stably(scene, over):
 
 # -- parallel -----------------------------------------------------------------------------
 
-def read_history(path):
-    with open(os.path.join(path, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
-
-
 @pytest.mark.mpi
-def test_mpi_two_ranks_match_serial(rodfem, tmp_path):
+def test_mpi_two_ranks_match_serial(tmp_path):
     args = ["run", "viscoelastic-cantilever-2d", "--set", "n_elements=12", "--set", "t_end=0.3",
             "--set", "fy=-10", "--quiet"]
-    serial, par = tmp_path / "np1", tmp_path / "np2"
-    assert rodfem(*args, "--out", str(serial)).returncode == 0
-    p = rodfem(*args, "--out", str(par), np=2)
-    assert p.returncode == 0, p.stderr[-2000:]
-    a, b = read_history(serial), read_history(par)
+    a, b, _ = serial_and_parallel(tmp_path, args)
     for col in ("H", "supplied", "dissipated", "tip_x", "tip_y"):
         scale = max(np.max(np.abs(a[col])), 1e-300)
         assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col

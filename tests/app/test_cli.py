@@ -1,18 +1,11 @@
 """The command line contract: list/show/run, output files, bad input, Newton failure, MPI."""
-import csv
 import json
-import os
 
 import numpy as np
 import pytest
+from processes import history, serial_and_parallel
 
 from rodfem.app.cli import main
-
-
-def read_history(path):
-    with open(os.path.join(path, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
 
 def test_list_and_show(capsys):
@@ -29,7 +22,7 @@ def test_list_and_show(capsys):
 def test_run_writes_results(tmp_path):
     out = tmp_path / "fs"
     assert main(["run", "flying-spaghetti-2d", "--set", "t_end=3", "--quiet", "--out", str(out)]) == 0
-    h = read_history(out)
+    h = history(out)
     for col in ("t", "H", "supplied", "newton_its", "tip_x", "tip_y", "p_x", "p_y", "L_z"):
         assert col in h
     assert len(h["t"]) == 31 and h["t"][0] == 0.0
@@ -44,7 +37,7 @@ def test_run_writes_results(tmp_path):
 
 def test_clamped_scene_has_no_momentum_columns(tmp_path):
     assert main(["run", "roll-up-2d", "--set", "dt=0.1", "--quiet", "--out", str(tmp_path)]) == 0
-    h = read_history(tmp_path)
+    h = history(tmp_path)
     assert "tip_x" in h and "p_x" not in h and "L_z" not in h
 
 
@@ -103,20 +96,15 @@ def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
     assert "Newton failed at step 1" in last and "residual" in last and "Traceback" not in p.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "newton-failure" and s["failure"]["step"] == 1
-    assert len(read_history(out)["t"]) == 1  # the t = 0 row written before the failure
+    assert len(history(out)["t"]) == 1  # the t = 0 row written before the failure
 
 
 @pytest.mark.mpi
-def test_mpi_two_ranks_match_serial(rodfem, tmp_path):
+def test_mpi_two_ranks_match_serial(tmp_path):
     """mpirun -n 2 gives the serial history: every column at every time level (measured <= 1e-14 of
     its scale; bound 1e-11) and the same Newton iterations."""
     args = ["run", "flying-spaghetti-2d", "--set", "n_elements=20", "--set", "t_end=5", "--quiet"]
-    serial, par = tmp_path / "np1", tmp_path / "np2"
-    assert rodfem(*args, "--out", str(serial)).returncode == 0
-    p = rodfem(*args, "--out", str(par), np=2)
-    assert p.returncode == 0, p.stderr[-2000:]
-    a, b = read_history(serial), read_history(par)
-    assert json.loads((par / "summary.json").read_text())["mpi_ranks"] == 2
+    a, b, _ = serial_and_parallel(tmp_path, args)
     for col in ("H", "supplied", "tip_x", "tip_y", "p_x", "p_y", "L_z"):
         scale = max(np.max(np.abs(a[col])), 1.0)
         assert np.max(np.abs(a[col] - b[col])) <= 1e-11 * scale, col

@@ -1,13 +1,12 @@
 """Hyperelastic PH string (forms/string.py): energy balance per material, DG vs midpoint,
 orders in time and space, wave speed, extreme cases, bad parameters."""
-import json
 import math
-import os
 
 import numpy as np
 import pytest
 import ufl
 from mpi4py import MPI
+from processes import serial_and_parallel
 from ufl.algorithms import expand_derivatives
 
 from rodfem import Load, Problem, Support, run
@@ -345,25 +344,13 @@ def test_bad_parameter_cli(rodfem, tmp_path):
     assert len(lines) == 1 and "parameter 'EA' must be a number > 0" in lines[0]
 
 
-def read_history(path):
-    import csv
-    with open(os.path.join(path, "history.csv")) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
-
-
 @pytest.mark.mpi
-def test_crane_mpi_matches_serial(rodfem, tmp_path):
+def test_crane_mpi_matches_serial(tmp_path):
     """Crane on 1 and 2 ranks: the whole histories agree, every column at every time level against its
     scale (energies: max|H|, positions: the cable length 1).  Measured <= 1.7e-13 of the scale and the
     same Newton iterations; bound 1e-11."""
-    args = ["--set", "t_end=1.0", "--quiet"]
-    r1 = rodfem("run", "crane-manoeuvre", *args, "--out", str(tmp_path / "s"))
-    r2 = rodfem("run", "crane-manoeuvre", *args, "--out", str(tmp_path / "p"), np=2)
-    assert r1.returncode == 0 and r2.returncode == 0, r2.stderr
-    s2 = json.load(open(os.path.join(tmp_path, "p", "summary.json")))
-    assert s2["mpi_ranks"] == 2 and s2["max_balance_error_relative"] <= BALANCE
-    a, b = read_history(tmp_path / "s"), read_history(tmp_path / "p")
+    a, b, s2 = serial_and_parallel(tmp_path, ["run", "crane-manoeuvre", "--set", "t_end=1.0", "--quiet"])
+    assert s2["max_balance_error_relative"] <= BALANCE
     assert list(a) == list(b) and len(a["t"]) == 21
     assert np.array_equal(a["newton_its"], b["newton_its"])
     H = np.max(np.abs(a["H"]))

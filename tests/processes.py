@@ -1,0 +1,75 @@
+"""Running rodfem as a user does, in a child process: the console script, serial or under
+`mpirun -n np` (always inside `timeout`, so that a rank left waiting cannot hang the suite), and
+reading back what a run wrote (history.csv, summary.json)."""
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.path.dirname(sys.executable)
+RODFEM = os.path.join(BIN, "rodfem")
+
+
+def environment(**extra):
+    """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed."""
+    return dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+                OMPI_MCA_rmaps_base_oversubscribe="1", **extra)
+
+
+def command(*args, np=None, timeout=600):
+    """The argument list of `rodfem ARGS`, under `timeout T mpirun -n np` if np."""
+    cmd = [RODFEM, *map(str, args)]
+    if np:
+        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n",
+               str(np), *cmd]
+    return cmd
+
+
+def rodfem(*args, np=None, env=None, timeout=600):
+    """Run `rodfem ARGS` (under mpirun -n np if np) from the repository; the CompletedProcess."""
+    return subprocess.run(command(*args, np=np, timeout=timeout), capture_output=True, text=True,
+                          env=environment(**(env or {})), cwd=REPO, timeout=timeout + 30)
+
+
+def ok(p):
+    """p, after checking that it succeeded (else fail with the end of its stderr)."""
+    assert p.returncode == 0, p.stderr[-2000:]
+    return p
+
+
+def history(out):
+    """history.csv of the run in `out`: {column: array over the time levels}."""
+    with open(os.path.join(out, "history.csv")) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def summary(out):
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def serial_and_parallel(tmp_path, args, np=2, timeout=600):
+    """Run `rodfem ARGS` in serial and on np ranks (both must succeed); both histories and the
+    parallel run's summary (which must report np ranks)."""
+    serial, par = tmp_path / "np1", tmp_path / f"np{np}"
+    ok(rodfem(*args, "--out", serial, timeout=timeout))
+    ok(rodfem(*args, "--out", par, np=np, timeout=timeout))
+    s = summary(par)
+    assert s["mpi_ranks"] == np
+    return history(serial), history(par), s
+
+
+def assert_same_history(a, b, rtol, skip=()):
+    """Histories a and b have the same columns and rows, and every column (but `skip`) agrees to
+    rtol of its scale max(max|a|, 1)."""
+    assert list(a) == list(b) and len(a["t"]) == len(b["t"])
+    for col in a:
+        if col not in skip:
+            scale = max(np.max(np.abs(a[col])), 1.0)
+            assert np.max(np.abs(a[col] - b[col])) <= rtol * scale, col
