@@ -195,11 +195,11 @@ def test_a_second_run_continues_in_time():
 
 # -- interrupts and the standard streams -------------------------------------------------
 
-def wait_for_rows(out, rows=20, timeout=60):
+def wait_for_rows(out, count=20, timeout=60):
     t0 = time.time()
     while time.time() - t0 < timeout:
         try:
-            if len(rows(out)) >= rows:
+            if len(rows(out)) >= count:
                 return
         except (OSError, ValueError):
             pass
