@@ -18,7 +18,6 @@ Writes bench_actuators.md and bench_actuators.csv next to this file.
 
     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/bench_actuators.py
 """
-import csv
 import os
 import time
 
@@ -26,6 +25,7 @@ import numpy as np
 import ufl
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
+from report import table, write_csv
 
 from rodfem import Load, Problem, Support, run
 from rodfem.demos import soft_arm_swing
@@ -121,37 +121,34 @@ def main():
                 asm.append({"n_elements": n, "dofs": P.dofs, **{k: round(v, 4) for k, v in a.items()}})
                 print(asm[-1], flush=True)
     with open(os.path.join(HERE, "bench_actuators.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-        w = csv.DictWriter(f, fieldnames=list(asm[0]))
-        w.writeheader()
-        w.writerows(asm)
+        write_csv(f, rows)
+        write_csv(f, asm)
+
+    def extra(r, k, spec):      # the difference to the rod alone, and in per cent
+        return f"{r[k] - r['none ' + k]:{spec}} ({100 * (r[k] / r['none ' + k] - 1):+.0f} %)"
+    each = [{**a, "actuators": v, "F": a[v + " F"], "J": a[v + " J"]}
+            for a in asm for v in ("none", "tendon", "chamber", "tendon + chamber")]
+    lines = ["# Actuator ports: extra cost on the 3D rod (serial, the soft-arm-swing arm)", "",
+             "## Assembly: the same state with and without the actuators", "",
+             "ms per assembly of the residual F and of the Jacobian J (with the Dirichlet rows) of the rod "
+             "under gravity, alone and with one tendon, one chamber, or both, at the same deformed state "
+             "(after the 40 steps below); the variants timed in turn, the least of 7 batches kept (the "
+             "machine is shared).  Extra = the difference to the rod alone.  The scenes' chord Newton "
+             "assembles F every iteration and J at most every 8 iterations.", "",
+             *table(each, [("n_elements", "{}", "elements"), ("dofs", "{}"), ("actuators", "{}"),
+                           ("F", "{:.3f}", "F ms"), ("extra F", lambda r: extra(r, "F", "+.3f")),
+                           ("J", "{:.2f}", "J ms"), ("extra J", lambda r: extra(r, "J", "+.2f"))]), "",
+             "## Per step (context): 40 steps, dt = 0.005, released straight under gravity", "",
+             f"Tendon {TAU} N, chamber {PRESSURE / 1e3:g} kPa, or (no actuator) a body-fixed end moment "
+             f"{MOMENT * 1e3:g} mN m, each on over 0.05 s.  The chord Newton of the 3D scenes; ms per step "
+             "follows the iteration count, which follows the motion; ms per Newton iteration includes the "
+             "LU solves and the amortised Jacobians.  2-core shared machine: +-20 % noise.", "",
+             *table(rows, [("n_elements", "{}", "elements"), ("dofs", "{}"), ("variant", "{}", "load"),
+                           ("ms_per_step", "{}", "ms/step"), ("newton_its", "{}", "Newton its/step"),
+                           ("ms_per_newton_it", "{}", "ms/Newton it"), ("tip_deflection", "{:.4f}", "tip deflection"),
+                           ("max_balance_rel", "{:.1e}", "max balance / max H")])]
     with open(os.path.join(HERE, "bench_actuators.md"), "w") as f:
-        f.write("# Actuator ports: extra cost on the 3D rod (serial, the soft-arm-swing arm)\n\n")
-        f.write("## Assembly: the same state with and without the actuators\n\n"
-                "ms per assembly of the residual F and of the Jacobian J (with the Dirichlet rows) of the rod "
-                "under gravity, alone and with one tendon, one chamber, or both, at the same deformed state "
-                "(after the 40 steps below); the variants timed in turn, the least of 7 batches kept (the "
-                "machine is shared).  Extra = the difference to the rod alone.  The scenes' chord Newton "
-                "assembles F every iteration and J at most every 8 iterations.\n\n")
-        f.write("| elements | dofs | actuators | F ms | extra F | J ms | extra J |\n|---|---|---|---|---|---|---|\n")
-        for a in asm:
-            for v in ("none", "tendon", "chamber", "tendon + chamber"):
-                f.write(f"| {a['n_elements']} | {a['dofs']} | {v} | {a[v + ' F']:.3f} | "
-                        f"{a[v + ' F'] - a['none F']:+.3f} ({100 * (a[v + ' F'] / a['none F'] - 1):+.0f} %) | "
-                        f"{a[v + ' J']:.2f} | {a[v + ' J'] - a['none J']:+.2f} "
-                        f"({100 * (a[v + ' J'] / a['none J'] - 1):+.0f} %) |\n")
-        f.write("\n## Per step (context): 40 steps, dt = 0.005, released straight under gravity\n\n"
-                f"Tendon {TAU} N, chamber {PRESSURE / 1e3:g} kPa, or (no actuator) a body-fixed end moment "
-                f"{MOMENT * 1e3:g} mN m, each on over 0.05 s.  The chord Newton of the 3D scenes; ms per step "
-                "follows the iteration count, which follows the motion; ms per Newton iteration includes the "
-                "LU solves and the amortised Jacobians.  2-core shared machine: +-20 % noise.\n\n")
-        f.write("| elements | dofs | load | ms/step | Newton its/step | ms/Newton it | tip deflection | "
-                "max balance / max H |\n|---|---|---|---|---|---|---|---|\n")
-        for r in rows:
-            f.write(f"| {r['n_elements']} | {r['dofs']} | {r['variant']} | {r['ms_per_step']} | {r['newton_its']} | "
-                    f"{r['ms_per_newton_it']} | {r['tip_deflection']:.4f} | {r['max_balance_rel']:.1e} |\n")
+        f.write("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -11,17 +11,14 @@ Writes bench_cosserat_rod.md and bench_cosserat_rod.csv next to this file.
 
     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/bench_cosserat_rod.py
 """
-import csv
-import os
-
 from mpi4py import MPI
 from petsc4py import PETSc
+from report import table, write_report
 
 from rodfem import run
 from rodfem.demos import flying_spaghetti_3d
 from rodfem.errors import NewtonFailure
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 # Newton variants.  "default" is what the 3D scenes use (demos/_rod3d.py NEWTON:
 # chord Newton reusing the Jacobian and its LU over 8 iterations, across steps,
 # full-Newton retry on failure; the partial LU of rodfem/la/partial_lu.py, which orders
@@ -83,26 +80,19 @@ def main():
     set_options({})
     dts = largest_dt()
     print(dts, flush=True)
-    with open(os.path.join(HERE, "bench_cosserat_rod.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    with open(os.path.join(HERE, "bench_cosserat_rod.md"), "w") as f:
-        f.write("# 3D Cosserat rod: cost per time step (serial, flying-spaghetti-3d spatial, dt = 0.1)\n\n")
-        f.write("Serial, 2-core machine. Newton variants: see VARIANTS in the script (default = the scenes' chord "
-                "Newton; PETSc's LU in RCM order meets zero pivots on the multiplier rows and the engine switches "
-                "to the partial LU, which orders them last; the Jacobian holds only its possible nonzeros; 3 steps at 1024 elements from a fresh start include the first factorizations: "
-                "benchmarks/scaling.md has warm steps).\n"
-                "J = Jacobian assembly, F = residual assembly, rest = LU factorisation/solve + energy + observables.\n\n")
-        f.write("| elements | dofs | Newton | ms/step | Newton its/step | J ms | F ms | LU + rest ms | solver |\n")
-        f.write("|---|---|---|---|---|---|---|---|---|\n")
-        for r in rows:
-            f.write(f"| {r['n_elements']} | {r['dofs']} | {r['newton']} | {r['ms_per_step']} | {r['newton_its']} | "
-                    f"{r['J_ms']} | {r['F_ms']} | {r['solve_and_rest_ms']} | {r['linear_solver']} |\n")
-        f.write("\n## Largest dt (flying-spaghetti-3d, planar variant, 10 elements, t_end = 15, scene default Newton)\n\n")
-        f.write("| dt | result | Newton its/step |\n|---|---|---|\n")
-        for dt, status, its in dts:
-            f.write(f"| {dt} | {status} | {its:.2f} |\n")
+    dts = [{"dt": dt, "result": status, "newton_its": its} for dt, status, its in dts]
+    write_report("bench_cosserat_rod", rows, [
+        ("n_elements", "{}", "elements"), ("dofs", "{}"), ("newton", "{}", "Newton"), ("ms_per_step", "{}", "ms/step"),
+        ("newton_its", "{}", "Newton its/step"), ("J_ms", "{}", "J ms"), ("F_ms", "{}", "F ms"),
+        ("solve_and_rest_ms", "{}", "LU + rest ms"), ("linear_solver", "{}", "solver")],
+        "3D Cosserat rod: cost per time step (serial, flying-spaghetti-3d spatial, dt = 0.1)",
+        intro=["Serial, 2-core machine. Newton variants: see VARIANTS in the script (default = the scenes' chord "
+               "Newton; PETSc's LU in RCM order meets zero pivots on the multiplier rows and the engine switches "
+               "to the partial LU, which orders them last; the Jacobian holds only its possible nonzeros; 3 steps at 1024 elements from a fresh start include the first factorizations: "
+               "benchmarks/scaling.md has warm steps).",
+               "J = Jacobian assembly, F = residual assembly, rest = LU factorisation/solve + energy + observables."],
+        notes=["## Largest dt (flying-spaghetti-3d, planar variant, 10 elements, t_end = 15, scene default Newton)", "",
+               *table(dts, [("dt", "{}"), ("result", "{}"), ("newton_its", "{:.2f}", "Newton its/step")])])
 
 
 if __name__ == "__main__":

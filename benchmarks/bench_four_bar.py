@@ -7,16 +7,12 @@ wall time per step, split into residual assembly (the three beams' blocks + the 
 Jacobian assembly and the rest (LU + SNES), Newton iterations per step, the balance error and
 the largest pin gap.
 """
-import csv
-import os
-
 import numpy as np
 from mpi4py import MPI
+from report import write_report
 
 from rodfem import run
 from rodfem.app.scene import load
-
-HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def cost(n, steps=50, repeats=3):
@@ -41,20 +37,12 @@ def cost(n, steps=50, repeats=3):
 
 def main():
     rows = [cost(n) for n in (6, 60)]
-    with open(os.path.join(HERE, "four_bar.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    lines = ["# Four-bar mechanism: cost per step (serial, OMP_NUM_THREADS=1)", "",
-             "| elements | dofs | ms/step | residual ms | Jacobian ms | LU + rest ms | Newton its | balance / max H | pin gap | LU |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['elements']} | {r['dofs']} | {r['ms_per_step']:.2f} | {r['residual_ms']:.2f} | "
-                     f"{r['jacobian_ms']:.2f} | {r['solve_ms']:.2f} | {r['newton_its']:.2f} | "
-                     f"{r['max_balance_error_rel']:.1e} | {r['max_pin_gap']:.1e} | {r['linear_solver']} |")
-    with open(os.path.join(HERE, "four_bar.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    write_report("four_bar", rows, [
+        ("elements", "{}"), ("dofs", "{}"), ("ms_per_step", "{:.2f}", "ms/step"),
+        ("residual_ms", "{:.2f}", "residual ms"), ("jacobian_ms", "{:.2f}", "Jacobian ms"),
+        ("solve_ms", "{:.2f}", "LU + rest ms"), ("newton_its", "{:.2f}", "Newton its"),
+        ("max_balance_error_rel", "{:.1e}", "balance / max H"), ("max_pin_gap", "{:.1e}", "pin gap"),
+        ("linear_solver", "{}", "LU")], "Four-bar mechanism: cost per step (serial, OMP_NUM_THREADS=1)")
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ import sys
 
 import numpy as np
 from mpi4py import MPI
+from report import table, write_csv
 
 from rodfem import run
 from rodfem.app.scene import load
@@ -79,23 +80,17 @@ def main(argv):
         rows = [cost(label, name, o, factor, steps, repeats)
                 for label, name, o, steps in CASES for factor in (1, 10)]
         load_avg = f"{os.getloadavg()[0]:.1f}"
-        with open(os.path.join(HERE, "multibody.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+        write_csv(os.path.join(HERE, "multibody.csv"), rows)
     lines = ["# Multibody scenes: cost per step (serial, OMP_NUM_THREADS=1)", "",
              "Default size and 10x the elements; the first `steps` steps of each scene at its default h,",
              "best of 3.  Residual/Jacobian: assembly of all bodies' blocks and the joints' rows;",
              "LU + rest: the linear solves and SNES.  Free-flying: the chord Newton of the 3D rod scenes",
              "(the Jacobian and its LU reused over up to 8 iterations, driven to |F| <= 1e-12).", "",
-             "| case | elements | dofs | steps x h | ms/step | residual ms | Jacobian ms | LU + rest ms | Newton its "
-             "| balance / max H | joint gap | LU |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['case']} | {r['elements']} | {int(r['dofs'])} | {int(r['steps'])} x {r['dt']:g} | "
-                     f"{r['ms_per_step']:.2f} | {r['residual_ms']:.2f} | {r['jacobian_ms']:.2f} | {r['solve_ms']:.2f} | "
-                     f"{r['newton_its']:.2f} | {r['max_balance_error_rel']:.1e} | {r['max_joint_gap']:.1e} | "
-                     f"{r['linear_solver']} |")
+             *table(rows, [("case", "{}"), ("elements", "{}"), ("dofs", "{:.0f}"), ("steps", "{steps:.0f} x {dt:g}", "steps x h"),
+                           ("ms_per_step", "{:.2f}", "ms/step"), ("residual_ms", "{:.2f}", "residual ms"),
+                           ("jacobian_ms", "{:.2f}", "Jacobian ms"), ("solve_ms", "{:.2f}", "LU + rest ms"),
+                           ("newton_its", "{:.2f}", "Newton its"), ("max_balance_error_rel", "{:.1e}", "balance / max H"),
+                           ("max_joint_gap", "{:.1e}", "joint gap"), ("linear_solver", "{}", "LU")])]
     lines += [n.format(load=load_avg) for n in NOTES]
     with open(os.path.join(HERE, "multibody.md"), "w") as f:
         f.write("\n".join(lines) + "\n")

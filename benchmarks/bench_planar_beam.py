@@ -8,18 +8,16 @@ solve (LU factorisation + triangular solves + SNES), Newton iterations per
 step, and the balance error.  Then the set-up time of a scene with an empty
 JIT cache (forms compiled) and again with the cache filled (forms reused).
 """
-import csv
 import os
 import subprocess
 import sys
 import tempfile
 
 import numpy as np
+from report import write_report
 
 from rodfem import run
 from rodfem.app.scene import load
-
-HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def cost(n, steps=150, repeats=3):
@@ -53,22 +51,14 @@ def main():
     rows = [cost(n) for n in (10, 100, 1000)]
     with tempfile.TemporaryDirectory() as cache:
         cold, warm = setup_time(cache), setup_time(cache)
-    with open(os.path.join(HERE, "planar_beam.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-    lines = ["# Planar beam: cost per time step (flying-spaghetti-2d, serial, h = 0.1, 150 steps)", "",
-             "| elements | dofs | ms/step | residual ms | Jacobian ms | LU + rest ms | Newton its/step | max balance error / max H | LU |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['n_elements']} | {r['dofs']} | {r['ms_per_step']:.3f} | {r['residual_ms']:.3f} | "
-                     f"{r['jacobian_ms']:.3f} | {r['solve_ms']:.3f} | {r['newton_its']:.2f} | "
-                     f"{r['max_balance_error_rel']:.1e} | {r['linear_solver']} |")
-    lines += ["", f"Scene set-up with an empty JIT cache (forms compiled): {cold:.2f} s; "
-              f"second run, cache filled (forms reused, nothing recompiled): {warm:.2f} s.", ""]
-    with open(os.path.join(HERE, "planar_beam.md"), "w") as f:
-        f.write("\n".join(lines))
-    print("\n".join(lines))
+    write_report("planar_beam", rows, [
+        ("n_elements", "{}", "elements"), ("dofs", "{}"), ("ms_per_step", "{:.3f}", "ms/step"),
+        ("residual_ms", "{:.3f}", "residual ms"), ("jacobian_ms", "{:.3f}", "Jacobian ms"),
+        ("solve_ms", "{:.3f}", "LU + rest ms"), ("newton_its", "{:.2f}", "Newton its/step"),
+        ("max_balance_error_rel", "{:.1e}", "max balance error / max H"), ("linear_solver", "{}", "LU")],
+        "Planar beam: cost per time step (flying-spaghetti-2d, serial, h = 0.1, 150 steps)",
+        notes=[f"Scene set-up with an empty JIT cache (forms compiled): {cold:.2f} s; "
+               f"second run, cache filled (forms reused, nothing recompiled): {warm:.2f} s."])
 
 
 if __name__ == "__main__":

@@ -13,13 +13,13 @@ Writes bench_slider_crank.md and bench_slider_crank.csv next to this file.
 
     OMP_NUM_THREADS=1 .venv/bin/python benchmarks/bench_slider_crank.py [--quick]
 """
-import csv
 import os
 import sys
 import time
 
 import numpy as np
 from mpi4py import MPI
+from report import table, write_csv
 
 from rodfem import run
 from rodfem.demos import _slider_crank_reference as exact
@@ -99,36 +99,36 @@ def main(quick=False):
               "max_err_theta", "energy_drift", "max_balance_error", "balance_rel", "max_constraint_residual",
               "max_orthonormality_error", "setup_s"]
     name = "bench_slider_crank" + ("_quick" if quick else "")
-    with open(os.path.join(HERE, name + ".csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
+    write_csv(os.path.join(HERE, name + ".csv"), rows, fields)
+    times = ("1", "2", "3", "4", "5")
+    positions = [{"dt": "exact", **dict(zip(times, x_exact))}] + [
+        {"dt": f"{r['dt']:g}", **dict(zip(times, r["slider_x_t1_to_t5"]))} for r in rows]
+    lines = ["# slider-crank-3d: the IFToMM spatial rigid slider-crank against its exact motion", "",
+             "Serial, on a shared 2-core machine with other jobs running (wall times vary up to 2x between runs), midpoint rule (the discrete-gradient rule is the "
+             "same for rigid bodies: H is quadratic), t_end = 5 s; 3 director-based rigid bodies, 4 joints "
+             "(17 multipliers), 107 unknowns per step. Time loop only (form compilation: `setup_s`); ms/step is the "
+             "wall time, CPU the process time of the loop (less sensitive to other jobs on the machine; it "
+             "includes the per-step orthonormality check of this benchmark, about 0.1 ms).", "",
+             f"Exact motion (demos/_slider_crank_reference.py): t(theta) = int sqrt(M / (2 (H - V))) dtheta, "
+             f"Fourier-integrated and Newton-inverted (round-off accurate; a composite Gauss-Legendre rule agrees "
+             f"to 1e-15 s). H = {H:.8f} J (T0 = {T0:.8f}, V0 = {V0:.6f}); {ref.period:.6f} s per crank "
+             f"revolution; x_C(1..5 s) = {', '.join(f'{x:.7f}' for x in x_exact)} m.", "",
+             *table(rows, [("dt", "{:g}"), ("steps", "{}"),
+                           ("ms_per_step", "{ms_per_step:.2f} ({cpu_ms_per_step:.2f})", "ms/step (CPU)"),
+                           ("newton_its", "{newton_its:.2f} ({newton_its_max})", "Newton its/step (max)"),
+                           ("max_err_x", "{:.3e}", "max_t abs(x_C - exact) [m]"),
+                           ("order", lambda r: "" if np.isnan(r["order_x"]) else f"{r['order_x']:.2f}"),
+                           ("err_x_t5", "{:.3e}", "abs(x_C - exact) at t = 5"),
+                           ("max_err_theta", "{:.3e}", "max_t abs(theta - exact) [rad]"),
+                           ("energy_drift", "{:.1e}", "drift of E = H - supplied + V0 [J]"),
+                           ("max_balance_error", "{max_balance_error:.1e} ({balance_rel:.1e})",
+                            "max balance error [J] (rel. to max H)"),
+                           ("max_constraint_residual", "{:.1e}", "max abs(g)"),
+                           ("max_orthonormality_error", "{:.1e}", "max abs(R^T R - I)")]), "",
+             "Slider position x_C at t = 1, 2, 3, 4, 5 s [m]:", "",
+             *table(positions, [("dt", "{}")] + [(t, "{:.7f}") for t in times])]
     with open(os.path.join(HERE, name + ".md"), "w") as f:
-        f.write("# slider-crank-3d: the IFToMM spatial rigid slider-crank against its exact motion\n\n")
-        f.write("Serial, on a shared 2-core machine with other jobs running (wall times vary up to 2x between runs), midpoint rule (the discrete-gradient rule is the "
-                "same for rigid bodies: H is quadratic), t_end = 5 s; 3 director-based rigid bodies, 4 joints "
-                "(17 multipliers), 107 unknowns per step. Time loop only (form compilation: `setup_s`); ms/step is the "
-                "wall time, CPU the process time of the loop (less sensitive to other jobs on the machine; it "
-                "includes the per-step orthonormality check of this benchmark, about 0.1 ms).\n\n")
-        f.write(f"Exact motion (demos/_slider_crank_reference.py): t(theta) = int sqrt(M / (2 (H - V))) dtheta, "
-                f"Fourier-integrated and Newton-inverted (round-off accurate; a composite Gauss-Legendre rule agrees "
-                f"to 1e-15 s). H = {H:.8f} J (T0 = {T0:.8f}, V0 = {V0:.6f}); {ref.period:.6f} s per crank "
-                f"revolution; x_C(1..5 s) = {', '.join(f'{x:.7f}' for x in x_exact)} m.\n\n")
-        f.write("| dt | steps | ms/step (CPU) | Newton its/step (max) | max_t abs(x_C - exact) [m] | order | "
-                "abs(x_C - exact) at t = 5 | max_t abs(theta - exact) [rad] | drift of E = H - supplied + V0 [J] | "
-                "max balance error [J] (rel. to max H) | max abs(g) | max abs(R^T R - I) |\n")
-        f.write("|---|---|---|---|---|---|---|---|---|---|---|---|\n")
-        for r in rows:
-            order = "" if np.isnan(r["order_x"]) else f"{r['order_x']:.2f}"
-            f.write(f"| {r['dt']:g} | {r['steps']} | {r['ms_per_step']:.2f} ({r['cpu_ms_per_step']:.2f}) | {r['newton_its']:.2f} "
-                    f"({r['newton_its_max']}) | {r['max_err_x']:.3e} | {order} | {r['err_x_t5']:.3e} | "
-                    f"{r['max_err_theta']:.3e} | {r['energy_drift']:.1e} | {r['max_balance_error']:.1e} "
-                    f"({r['balance_rel']:.1e}) | {r['max_constraint_residual']:.1e} | "
-                    f"{r['max_orthonormality_error']:.1e} |\n")
-        f.write("\nSlider position x_C at t = 1, 2, 3, 4, 5 s [m]:\n\n| dt | 1 | 2 | 3 | 4 | 5 |\n|---|---|---|---|---|---|\n")
-        f.write("| exact | " + " | ".join(f"{x:.7f}" for x in x_exact) + " |\n")
-        for r in rows:
-            f.write(f"| {r['dt']:g} | " + " | ".join(f"{x:.7f}" for x in r["slider_x_t1_to_t5"]) + " |\n")
+        f.write("\n".join(lines) + "\n")
         f.write(PUBLISHED)
 
 

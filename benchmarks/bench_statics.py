@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 from mpi4py import MPI
+from report import table
 
 from rodfem.analysis.statics import Statics
 from rodfem.app.scene import load
@@ -33,8 +34,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
     args = ap.parse_args()
-    lines = ["| scene | elements | error / L (1 adaptive) | load steps (halved), Newton its | "
-             "error / L (10 fixed) | load steps (halved), Newton its | order |", "|---|---|---|---|---|---|---|"]
+    # a, b: (error / L, load steps, halved, Newton its) with 1 adaptive and 10 fixed load steps
+    columns = [("scene", "{}"), ("elements", "{}"), ("a", "{a[0]:.3e}", "error / L (1 adaptive)"),
+               ("a", "{a[1]} ({a[2]}), {a[3]}", "load steps (halved), Newton its"),
+               ("b", "{b[0]:.3e}", "error / L (10 fixed)"), ("b", "{b[1]} ({b[2]}), {b[3]}", "load steps (halved), Newton its"),
+               ("order", "{}")]
+    rows = []
     for name, extra, meshes in CASES:
         prev = None
         for n in meshes:
@@ -43,10 +48,10 @@ def main():
             order = f"{np.log2(prev / a[0]):.2f}" if prev and a[0] > 1e-12 else ""
             prev = a[0]
             label = name + ("" if not extra else " " + " ".join(f"{k}={v:g}" for k, v in extra.items()))
-            lines.append(f"| {label} | {n} | {a[0]:.3e} | {a[1]} ({a[2]}), {a[3]} | {b[0]:.3e} | {b[1]} ({b[2]}), {b[3]} | {order} |")
-            print(lines[-1], flush=True)
+            rows.append({"scene": label, "elements": n, "a": a, "b": b, "order": order})
+            print(table(rows[-1:], columns)[-1], flush=True)
     with open(os.path.join(args.out, "statics.md"), "w") as f:
-        f.write("\n".join(lines) + "\n")
+        f.write("\n".join(table(rows, columns)) + "\n")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,6 @@ next to every point: the machine is shared, and a loaded machine makes `mpirun -
 needs both cores) look worse than it is.
 """
 import argparse
-import csv
 import json
 import os
 import resource
@@ -23,6 +22,8 @@ import shutil
 import subprocess
 import sys
 import time
+
+from report import table, write_csv
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PYTHON = sys.executable
@@ -153,13 +154,25 @@ def history_match(a, b):
     return worst
 
 
+# the columns of the tables: cost per step (serial / np2) and where the time goes
+COST = {"elements": "elements", "dofs": "dofs", "wall1": "serial ms/step", "wall2": "np2 ms/step", "speed_up": "speed-up",
+        "cpu1": "serial CPU", "cpu2": "np2 CPU (max rank)", "its": "Newton its", "mem": "peak MB serial / per rank np2",
+        "balance": "max balance error / max H", "match": "np2 vs serial", "load": "load s / np2"}
+SPLIT = {"F_ms": "F", "J_ms": "J", "lu_ms": "LU", "solve_ms": "solves", "Z_ms": "Z", "S_ms": "S"}
+
+
+def split(by, scene, n):
+    """The cells of a line of where the time goes: serial / np2 in every column."""
+    r1, r2 = by.get((scene, n, 1), {}), by.get((scene, n, 2), {})
+    cells = {k: " / ".join("-" if r.get(k) is None else f"{r[k]:.1f}" for r in (r1, r2)) for k in SPLIT}
+    rest = (f"{r['wall_ms'] - sum(r.get(x, 0.0) for x in SPLIT):.1f}" if "wall_ms" in r else "-" for r in (r1, r2))
+    return {"elements": n, **cells, "rest": " / ".join(rest)}
+
+
 def write(rows, small, started, finished):
     fields = ["scene", "elements", "dofs", "ranks", "wall_ms", "cpu_ms", "newton_its", "balance_rel", "mem_mb",
               "solver", "F_ms", "J_ms", "lu_ms", "solve_ms", "Z_ms", "S_ms", "load"]
-    with open(os.path.join(HERE, "scaling.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
-        w.writeheader()
-        w.writerows([r for r in rows if "failed" not in r])
+    write_csv(os.path.join(HERE, "scaling.csv"), [r for r in rows if "failed" not in r], fields)
     by = {(r["scene"], r["elements"], r["ranks"]): r for r in rows}
     lines = ["# Scaling: cost per time step against mesh size, serial and `mpirun -n 2` (issue 11)", "",
              f"Measured {started} to {finished} on the shared 2-core machine (OMP_NUM_THREADS=1); "
@@ -173,27 +186,24 @@ def write(rows, small, started, finished):
         ns = sorted({r["elements"] for r in rows if r["scene"] == scene})
         if not ns:
             continue
-        lines += [f"## {title}", "",
-                  "| elements | dofs | serial ms/step | np2 ms/step | speed-up | serial CPU | np2 CPU (max rank) | "
-                  "Newton its | peak MB serial / per rank np2 | max balance error / max H | np2 vs serial | "
-                  "load s / np2 |",
-                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        cells = []
         for n in ns:
             s, p = by.get((scene, n, 1)), by.get((scene, n, 2))
+            c = {**dict.fromkeys(COST, ""), "elements": n}
+            cells.append(c)
             if s is None or "failed" in s:
-                lines.append(f"| {n} | | failed | | | | | | | | | |")
+                c["wall1"] = "failed"
                 continue
+            c.update(dofs=s["dofs"], wall1=f"{s['wall_ms']:.1f}", cpu1=f"{s['cpu_ms']:.1f}", its=f"{s['newton_its']:.2f}",
+                     mem=f"{s['mem_mb']:.0f}", balance=f"{s['balance_rel']:.1e}", load=f"{s['load']:.1f}")
             if p is None or "failed" in p:
-                pm = "failed" if p else "-"
-                lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {pm} | | {s['cpu_ms']:.1f} | | "
-                             f"{s['newton_its']:.2f} | {s['mem_mb']:.0f} | {s['balance_rel']:.1e} | | "
-                             f"{s['load']:.1f} |")
+                c["wall2"] = "failed" if p else "-"
                 continue
-            lines.append(f"| {n} | {s['dofs']} | {s['wall_ms']:.1f} | {p['wall_ms']:.1f} | "
-                         f"{s['wall_ms'] / p['wall_ms']:.2f} | {s['cpu_ms']:.1f} | {p['cpu_ms']:.1f} | "
-                         f"{s['newton_its']:.2f} / {p['newton_its']:.2f} | {s['mem_mb']:.0f} / {p['mem_mb']:.0f} | "
-                         f"{max(s['balance_rel'], p['balance_rel']):.1e} | {history_match(s, p):.1e} | "
-                         f"{s['load']:.1f} / {p['load']:.1f} |")
+            c.update(wall2=f"{p['wall_ms']:.1f}", speed_up=f"{s['wall_ms'] / p['wall_ms']:.2f}", cpu2=f"{p['cpu_ms']:.1f}",
+                     its=f"{s['newton_its']:.2f} / {p['newton_its']:.2f}", mem=f"{s['mem_mb']:.0f} / {p['mem_mb']:.0f}",
+                     balance=f"{max(s['balance_rel'], p['balance_rel']):.1e}", match=f"{history_match(s, p):.1e}",
+                     load=f"{s['load']:.1f} / {p['load']:.1f}")
+        lines += [f"## {title}", "", *table(cells, [(k, "{}", h) for k, h in COST.items()])]
         serial = [(n, by[(scene, n, 1)]) for n in ns if "failed" not in by.get((scene, n, 1), {"failed": 1})]
         if scene == PLANAR and len(serial) >= 2:
             big = [(n, r) for n, r in serial if n >= 1000]
@@ -206,18 +216,8 @@ def write(rows, small, started, finished):
                       "both sweeps, the interface allreduce and solve), Z (the interface columns solved one by "
                       "one: only in the pivoting MUMPS stage, else -/0), S (the interface rows gathered and the "
                       "Schur terms summed), rest (time loop, energy, observables, waiting):", "",
-                  "| elements | F | J | LU | solves | Z | S | rest |", "|---|---|---|---|---|---|---|---|"]
-        keys = ("F_ms", "J_ms", "lu_ms", "solve_ms", "Z_ms", "S_ms")
-        for n in ns:
-            cells = []
-            for key in keys:
-                vals = [by.get((scene, n, k), {}).get(key) for k in (1, 2)]
-                cells.append(" / ".join("-" if v is None else f"{v:.1f}" for v in vals))
-            rest = []
-            for k in (1, 2):
-                r = by.get((scene, n, k), {})
-                rest.append(f"{r['wall_ms'] - sum(r.get(x, 0.0) for x in keys):.1f}" if "wall_ms" in r else "-")
-            lines.append(f"| {n} | " + " | ".join(cells) + f" | {' / '.join(rest)} |")
+                  *table([split(by, scene, n) for n in ns], [("elements", "{}"), *((k, "{}", h) for k, h in SPLIT.items()),
+                                                  ("rest", "{}")])]
         lines.append("")
     if small is not None:
         lines += [f"10-element planar step (serial, best of 5 runs of 150 steps): {small:.3f} ms.", ""]
