@@ -9,7 +9,7 @@ import ufl
 from dolfinx import fem
 
 from rodfem.fem import compat
-from rodfem.forms.string import _ones, set_state
+from rodfem.forms.string import relaxed, set_state
 from rodfem.nls.newton import Newton
 
 
@@ -60,6 +60,6 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
     S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))
     S.assign(problem.x0, "C", ufl.inner(r.dx(0), r.dx(0)))
     for k in range(1, len(getattr(model, "branches", ())) + 1):   # long held: Maxwell branches relaxed
-        S.assign(problem.x0, f"C_{k}", _ones)
+        S.assign(problem.x0, f"C_{k}", relaxed)
     set_state(problem)
     return solve.iterations

@@ -188,8 +188,8 @@ class String:
 
     def compatible_strains(self, x):
         """C = d_s r . d_s r; Maxwell branches relaxed, C_k = 1."""
-        relaxed = {f"C_{k}": _ones for k in range(1, len(self.branches) + 1)}
-        return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0)), **relaxed}
+        branches = {f"C_{k}": relaxed for k in range(1, len(self.branches) + 1)}
+        return {"C": ufl.inner(x["r"].dx(0), x["r"].dx(0)), **branches}
 
     # statics and modes (rodfem/analysis/statics.py): the total-form row C = |d_s r|^2 replaces the rate row of C
     static_fields = ("C",)
@@ -216,7 +216,8 @@ class String:
         return 2 * ufl.diff(self.material(Cv), Cv) * ufl.sqrt(C)
 
 
-def _ones(x):
+def relaxed(x):
+    """C_k = 1 at the points x: a Maxwell branch at rest (unstretched)."""
     return np.ones(x.shape[1])
 
 

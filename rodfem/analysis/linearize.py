@@ -95,7 +95,7 @@ def _body_fields(body):
     coord = np.zeros(n)
     for fld in S.fields:
         if body.rigid:   # one cell: one dof per component (RigidSpace collapses nothing)
-            dofs = np.asarray(S._dofs(fld.name))
+            dofs = np.asarray(S.field_dofs(fld.name))
             field[dofs], comp[dofs], coord[dofs] = fld.name, np.arange(len(dofs)), 0.5
             continue
         Vi, dofs = S.collapse(fld.name)

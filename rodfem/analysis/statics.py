@@ -35,12 +35,13 @@ scenes has one: end moments and dead loads on rods and cables are
 monotone).  A failure ends with a one-line `StaticFailure` (exit code 3).
 """
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 import ufl
 from dolfinx import fem
 
-from rodfem.core.integrators import Step, _flatten, _unflatten
+from rodfem.core.integrators import Step, flatten, unflatten
 from rodfem.core.system import JointRows
 from rodfem.errors import NewtonFailure, ParameterError
 from rodfem.fem.assembly import BlockAssembler, BodyBlock
@@ -83,8 +84,8 @@ class RestStep(Step):
 
     def effort(self, energy, names):
         like = [self.x1[n] for n in names]
-        X = ufl.variable(_flatten(like))
-        return _unflatten(ufl.diff(energy(*_unflatten(X, like)), X), like)
+        X = ufl.variable(flatten(like))
+        return unflatten(ufl.diff(energy(*unflatten(X, like)), X), like)
 
 
 def static_fields(model):
@@ -147,7 +148,7 @@ class Statics:
         run(problem, dt, t_end)              # starts at rest in the equilibrium
     """
 
-    def __init__(self, target, options=None):
+    def __init__(self, target, options: Optional[dict] = None):
         self.target = target.build()
         self.bodies = target.body_items()
         self.refs = {}
@@ -181,7 +182,7 @@ class Statics:
         self.unknown.getArray()[:] = values
 
     # -- Newton with load continuation ------------------------------------------------
-    def solve(self, t=0.0, steps=1, adaptive=True, min_step=1e-5):
+    def solve(self, t: float = 0.0, steps: int = 1, adaptive: bool = True, min_step: float = 1e-5) -> "StaticResult":
         """Equilibrium under the inputs at time t: mu = 0 -> 1 in load steps starting at 1/steps
         (fixed if not `adaptive`).  The solution is left as x_n (and x_{n+1}) of the problem,
         at rest.  Returns a StaticResult; raises StaticFailure."""
@@ -233,7 +234,7 @@ class Statics:
         self.target.set_state(self.unknown)
 
 
-def solve(target, t=0.0, steps=1, adaptive=True, options=None):
+def solve(target, t: float = 0.0, steps: int = 1, adaptive: bool = True, options: Optional[dict] = None):
     """Static equilibrium of `target` (Problem or System) at time t, left in its state; returns
     (Statics, StaticResult)."""
     statics = Statics(target, options)

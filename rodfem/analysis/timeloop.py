@@ -14,11 +14,13 @@ is the one implementation): `t` (the time of its state x_n, advanced by the loop
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Callable, Optional
 
 import numpy as np
 
 from rodfem.common import interrupts
 from rodfem.common.limits import check_steps
+from rodfem.core.model import SteppedSystem
 from rodfem.errors import NewtonFailure
 
 
@@ -29,15 +31,15 @@ class Result:
     wall_time: float = 0.0
     steps: int = 0
 
-    def column(self, name):
+    def column(self, name: str) -> np.ndarray:
         return np.array([r[name] for r in self.rows])
 
     @property
-    def max_balance_error(self):
+    def max_balance_error(self) -> float:
         return max((abs(r["balance_error"]) for r in self.rows[1:]), default=0.0)
 
 
-def steps_for(dt, t_end):
+def steps_for(dt: float, t_end: float) -> int:
     """Number of steps n with n*dt = t_end to a relative 1e-9; at most MAX_STEPS (ValueError otherwise)."""
     if not (math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a number > 0 (got {dt!r})")
@@ -51,7 +53,8 @@ def steps_for(dt, t_end):
     return n
 
 
-def run(problem, dt, t_end, writer=None, progress=False, result=None, start=None, after_step=None):
+def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: bool = False,
+        result: Optional[Result] = None, start=None, after_step: Optional[Callable] = None) -> Result:
     """Integrate `problem` from its current time `problem.t` to t_end with step dt.
 
     A new Problem starts at t = 0.  A second call continues from where the first

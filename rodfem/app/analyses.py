@@ -70,7 +70,7 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
             summary["error"] = max(errs.values()) if errs else None
             summary["error_relative"] = summary["error"] / scale if errs else None
         if outdir:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
-            checkpoint.save(outdir, problem, checkpoint._Layout(problem), 0, None, problem.hamiltonian(), 0.0,
+            checkpoint.save(outdir, problem, checkpoint.Layout(problem), 0, None, problem.hamiltonian(), 0.0,
                             {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
             writer.frame(1.0)
 

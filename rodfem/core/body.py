@@ -169,7 +169,7 @@ class RigidSpace(StateSpace):
     `mpirun -n 2` crashed for the planar rigid body).  Each field component has one dof, on the
     rank that owns the cell (found with locate_dofs_topological on the subspace views)."""
 
-    def _dofs(self, name):
+    def field_dofs(self, name):
         """Local dofs of field `name` in W, one per component (empty on the ranks without the cell)."""
         cells = np.arange(self.mesh.topology.index_map(self.mesh.topology.dim).size_local, dtype=np.int32)
         sub = self.sub(name)
@@ -185,14 +185,14 @@ class RigidSpace(StateSpace):
         """Set field `name` of u to `value` (a callable x -> values, evaluated at the cell's midpoint)."""
         if isinstance(value, ufl.core.expr.Expr):
             return super().assign(u, name, value)
-        dofs = self._dofs(name)
+        dofs = self.field_dofs(name)
         if len(dofs):
             u.x.array[dofs] = np.asarray(value(self._midpoint()), dtype=float).reshape(-1)
         u.x.scatter_forward()
 
     def nodal(self, u, name):
         """(s, values[npoints, size]): the cell midpoint and the field's value, where the cell is owned."""
-        dofs = self._dofs(name)
+        dofs = self.field_dofs(name)
         if not len(dofs):
             return np.zeros(0), np.zeros((0, self.field(name).size))
         return self._midpoint()[0], u.x.array[dofs].reshape(1, -1)

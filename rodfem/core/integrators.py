@@ -28,7 +28,7 @@ RULES = ("midpoint", "discrete-gradient")
 DG_THRESHOLD = 1e-3
 
 
-def _flatten(values):
+def flatten(values):
     comps = []
     for v in values:
         if v.ufl_shape == ():
@@ -38,7 +38,7 @@ def _flatten(values):
     return ufl.as_vector(comps)
 
 
-def _unflatten(vec, like):
+def unflatten(vec, like):
     out, k = [], 0
     for v in like:
         if v.ufl_shape == ():
@@ -74,14 +74,14 @@ class Step:
     def effort(self, energy, names):
         """Co-energies z_i of the energy density `energy(*x_names)`, one per name."""
         like = [self.x0[n] for n in names]
-        X0, X1 = _flatten(like), _flatten([self.x1[n] for n in names])
+        X0, X1 = flatten(like), flatten([self.x1[n] for n in names])
         Xm = ufl.variable(0.5 * (X0 + X1))
-        grad = ufl.diff(energy(*_unflatten(Xm, like)), Xm)
+        grad = ufl.diff(energy(*unflatten(Xm, like)), Xm)
         if self.rule == "discrete-gradient":
             dX = X1 - X0
             dX2 = ufl.inner(dX, dX)
-            dW = energy(*_unflatten(X1, like)) - energy(*_unflatten(X0, like))
+            dW = energy(*unflatten(X1, like)) - energy(*unflatten(X0, like))
             d3W = ufl.inner(ufl.diff(ufl.inner(ufl.diff(ufl.inner(grad, dX), Xm), dX), Xm), dX)
             bracket = ufl.conditional(ufl.gt(dX2, DG_THRESHOLD ** 2), dW - ufl.inner(grad, dX), d3W / 24.0)
             grad = grad + bracket / ufl.conditional(ufl.gt(dX2, 0.0), dX2, 1.0) * dX
-        return _unflatten(grad, like)
+        return unflatten(grad, like)

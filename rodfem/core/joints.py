@@ -67,7 +67,7 @@ class Point:
         return f"{self.body.name}.{self.where}{tail}"
 
 
-def ground(x=(), R=None):
+def ground(x: Sequence[float] = (), R=None) -> Point:
     """A fixed point of the world at position x (default the origin), with the world axes
     (or the directors R = [d1 d2 d3]) and angle 0."""
     return Point(None, "ground", tuple(np.asarray(x, dtype=float).ravel()),

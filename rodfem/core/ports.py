@@ -25,7 +25,7 @@ from dolfinx import fem
 ENDS = {"left": 1, "right": 2}  # facet tags of s = 0 and s = L
 
 
-def constant_in_time(value, until=None):
+def constant_in_time(value, until: Optional[float] = None) -> Callable[[float], np.ndarray]:
     """u(t) = value for t <= until (all t if until is None), zero after."""
     value = np.asarray(value, dtype=float)
 
@@ -34,7 +34,7 @@ def constant_in_time(value, until=None):
     return u
 
 
-def ramp(value, t_ramp):
+def ramp(value, t_ramp: float) -> Callable[[float], np.ndarray]:
     """u(t) = value * min(t / t_ramp, 1)."""
     value = np.asarray(value, dtype=float)
     return lambda t: value * min(t / t_ramp, 1.0)

@@ -7,8 +7,12 @@ is `System` + `add` + `build` in one line, the form the single-body scenes use. 
 attributes (its state Functions x0 and x1, space, mesh, model, loads, ...) read through the
 problem (`problem.x0`, `problem.space`); F, J and H are its compiled forms.
 """
+from typing import Optional, Sequence
+
 from mpi4py import MPI
 
+from rodfem.core.model import Model
+from rodfem.core.ports import Load, Support
 from rodfem.core.system import System
 
 
@@ -20,8 +24,9 @@ class Problem(System):
     `t` is the time of the state x_n (0 at the start; the time loop advances it).
     """
 
-    def __init__(self, model, length, n_elements, loads=(), supports=(), initial=None,
-                 integrator="midpoint", comm=MPI.COMM_WORLD, newton_options=None):
+    def __init__(self, model: Model, length: float, n_elements: int, loads: Sequence[Load] = (),
+                 supports: Sequence[Support] = (), initial: Optional[dict] = None, integrator: str = "midpoint",
+                 comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None):
         super().__init__(integrator, comm, newton_options)
         self._place("", model, length, n_elements, loads, supports, initial)
         self.build()

@@ -81,7 +81,7 @@ def _field_keys(body, name):
 
 
 def _rigid_dofs(body, name):
-    return body.space._dofs(name)
+    return body.space.field_dofs(name)
 
 
 def _pack(problem, arrays, comm):
@@ -128,7 +128,7 @@ def _unpack(problem, data, arrays):
             arr[dofs] = vals[rows] if len(rows) else arr[dofs]
 
 
-class _Layout:
+class Layout:
     """The time loop's state vector of a system (its block vector X0: bodies, then multipliers)
     as per-body W-local arrays and the multipliers, and back."""
 
@@ -174,7 +174,7 @@ class Saver:
         self.outdir, self.out = outdir, outdir.path
         self.scene, self.params, self.problem = scene_name, params, problem
         self.every, self.n_steps = int(every), n_steps
-        self.layout = _Layout(problem)
+        self.layout = Layout(problem)
         self.comm = problem.comm
 
     def __call__(self, n, previous, H, supplied, dissipated=0.0):
@@ -183,7 +183,7 @@ class Saver:
         save(self.outdir, self.problem, self.layout, n, previous, H, supplied,
              {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every},
              dissipated=dissipated)
-        fresh_newton(self.problem)
+        self.problem.newton.restart()
         if n != self.n_steps:   # how far it got, if it is killed now
             from rodfem.io.output import write_json
             status = {"scene": self.scene, "status": "running", "steps": n, "t": n * self.problem.dt,
@@ -230,20 +230,6 @@ def _write(out, info, data):
     os.replace(tmp, path)
 
 
-def fresh_newton(problem):
-    """A new SNES (same settings, same matrix and vectors), as a resumed run has: the chord
-    Newton's lagged Jacobian then restarts at the same step in both runs."""
-    from petsc4py import PETSc
-    nw = problem.newton
-    snes = PETSc.SNES().create(nw.snes.comm)
-    snes.setOptionsPrefix(nw.prefix)
-    snes.setFunction(nw._residual, nw.b)
-    snes.setJacobian(nw._jacobian, nw.A)
-    nw.snes.destroy()
-    nw.snes = snes
-    nw._configure(nw.settings)
-
-
 # -- reading ---------------------------------------------------------------------------------------
 
 def read(directory):
@@ -284,7 +270,7 @@ def _fields(arrays, which):
 
 def restore(problem, meta, arrays):
     """Put the checkpoint's x_n into the problem; returns the loop's start (step, H, supplied, previous)."""
-    layout = _Layout(problem)
+    layout = Layout(problem)
     comm = problem.comm
 
     def vector(which):
@@ -302,7 +288,7 @@ def restore(problem, meta, arrays):
     solver = meta.get("linear_solver")    # a switch after a zero pivot (same number of ranks only)
     if solver in LU_CHAIN and meta.get("mpi_ranks") == comm.size and solver != lu_name(problem.newton.settings):
         problem.newton.use_lu(solver)
-        fresh_newton(problem)
+        problem.newton.restart()
     comm.Barrier()
     problem.t = float(meta["t"])
     return SimpleNamespace(step=int(meta["step"]), H=float(meta["H"]), supplied=float(meta["supplied"]),

@@ -78,13 +78,22 @@ class Newton:
             self.settings.update(LARGE_SETTINGS)
         self.settings.update(options or {})
         self.prefix = prefix
-        self.snes = PETSc.SNES().create(comm)
-        self.snes.setOptionsPrefix(prefix)
         self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
-        self.snes.setFunction(self._residual, self.b)
-        self.snes.setJacobian(self._jacobian, self.A)
-        self._configure(self.settings)
+        self.snes = None
+        self.restart()
         self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
+
+    def restart(self):
+        """A new SNES with the same settings, matrix and vectors: what a resumed run starts with
+        (a chord Newton's lagged Jacobian then restarts at the same step in both runs)."""
+        snes = PETSc.SNES().create(self.assembler.comm)
+        snes.setOptionsPrefix(self.prefix)
+        snes.setFunction(self._residual, self.b)
+        snes.setJacobian(self._jacobian, self.A)
+        if self.snes is not None:
+            self.snes.destroy()
+        self.snes = snes
+        self._configure(self.settings)
 
     @property
     def bcs(self):
