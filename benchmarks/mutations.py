@@ -291,7 +291,7 @@ def environment(copy):
 PROBE = """
 import importlib, sys
 from rodfem.app.scene import load
-mods = [importlib.import_module(m) for m in ("rodfem", "forms", "demos", "rodfem.app.cli")]
+mods = [importlib.import_module(m) for m in ("rodfem", "rodfem.forms", "rodfem.demos", "rodfem.app.cli")]
 scene = load("roll-up-2d")
 print("\\n".join([m.__file__ for m in mods] + [sys.modules[scene.build.__module__].__file__]))
 """
@@ -309,7 +309,7 @@ def preflight(copy):
     cli = [line for line in script.stderr.splitlines()
            if line.startswith("# code object from") and "rodfem/app/cli.py" in line]
     mpirun = shutil.which("mpirun")
-    mpi = subprocess.run(["timeout", "120", mpirun, "-n", "1", PYTHON, "-c", "import forms; print(forms.__file__)"],
+    mpi = subprocess.run(["timeout", "120", mpirun, "-n", "1", PYTHON, "-c", "import rodfem.forms as f; print(f.__file__)"],
                          cwd=copy, env=env, capture_output=True, text=True) if mpirun else None
     problems = []
     if len(found) != 5 or not all(p.startswith(copy) for p in found):
@@ -371,8 +371,12 @@ def run_one(mutation, ref=None, all_tests=False, timeout=900):
             code, tail = "timeout", ""
         failed = failed_tests(junit)
         # 1: some test failed.  Anything else (2: collection error, e.g. a mutation that does not
-        # import; timeout) says nothing about the tests and is reported as an error.
+        # import; timeout) says nothing about the tests and is reported as an error, unless the
+        # JUnit file names failed tests and the process died of a signal after writing it (PETSc's
+        # finalization crashes when a failed test's traceback still holds a solver).
         status = {0: "survived", 1: "caught"}.get(code, "error")
+        if status == "error" and failed and isinstance(code, int) and code < 0:
+            status = "caught"
         return {"status": status, "failed": failed, "code": code, "detail": "" if status != "error" else tail,
                 "seconds": time.time() - t0}
     finally:
