@@ -22,6 +22,8 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
+from rodfem.errors import InputError
+
 ENDS = {"left": 1, "right": 2}  # facet tags of s = 0 and s = L
 
 
@@ -58,18 +60,31 @@ class Load:
 
     def __post_init__(self):
         if self.where not in ("left", "right", "domain"):
-            raise ValueError(f"Load.where must be 'left', 'right' or 'domain' (got {self.where!r})")
+            raise InputError(f"Load.where must be 'left', 'right' or 'domain' (got {self.where!r})")
         if not callable(self.value):
             self.value = constant_in_time(self.value)
         self.name = self.name or f"{self.flow}@{self.where}"
 
     def bind(self, mesh, space):
-        u0 = np.asarray(self.value(0.0), dtype=float)
+        if self.pairing is None and self.flow not in space.names:
+            raise InputError(f"load {self.name}: Load.flow must be one of the fields {', '.join(space.names)} "
+                             f"(got {self.flow!r})")
+        u0 = self._value(0.0)
         if self.pairing is None:
             shape = space.field(self.flow).shape
             if u0.shape != tuple(shape):
-                raise ValueError(f"load {self.name}: value has shape {u0.shape}, field {self.flow!r} has {tuple(shape)}")
+                raise InputError(f"load {self.name}: value has shape {u0.shape}, field {self.flow!r} has {tuple(shape)}")
         self.constant = fem.Constant(mesh, u0)
+
+    def _value(self, t):
+        """u(t) as a finite array (InputError naming the load otherwise)."""
+        try:
+            u = np.asarray(self.value(t), dtype=float)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"load {self.name}: its value at t = {t:g} is not an array of numbers ({e})") from None
+        if not np.all(np.isfinite(u)):
+            raise InputError(f"load {self.name}: its value at t = {t:g} is not finite ({u})")
+        return u
 
     def _pair(self, step, w):
         if self.pairing is None:
@@ -80,7 +95,11 @@ class Load:
         return dx if self.where == "domain" else ds(ENDS[self.where])
 
     def update(self, t):
-        self.constant.value = np.asarray(self.value(t), dtype=float)
+        u = self._value(t)
+        if u.shape != self.constant.value.shape:
+            raise InputError(f"load {self.name}: its value at t = {t:g} has shape {u.shape}, at t = 0 it had "
+                             f"{self.constant.value.shape}")
+        self.constant.value = u
 
     def input_map(self, step, test, dx, ds):
         """B u: the load's term in the residual, -<u, B^T delta_x>."""

@@ -99,6 +99,8 @@ class StateSpace:
         """
         Vi, dofs = self.collapse(name)
         fi = fem.Function(Vi)
+        if not callable(value) and not isinstance(value, ufl.core.expr.Expr):
+            value = self._constant(name, value)
         if isinstance(value, ufl.core.expr.Expr):
             if value.ufl_shape != tuple(self.field(name).shape):
                 raise InputError(f"initial value of field '{name}': shape {value.ufl_shape}, "
@@ -113,6 +115,18 @@ class StateSpace:
                                  f"returning shape {want} is needed ({e})") from None
         u.x.array[dofs] = fi.x.array
         u.x.scatter_forward()
+
+    def _constant(self, name, value):
+        """A constant initial value (a number, or an array of the field's shape) as a function of x."""
+        shape = tuple(self.field(name).shape)
+        try:
+            v = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            v = None
+        if v is None or v.shape != shape or not np.all(np.isfinite(v)):
+            raise InputError(f"initial value of field '{name}': a function of x, a UFL expression or a constant of "
+                             f"shape {shape} is needed (got {value!r})")
+        return lambda x: np.outer(v, np.ones(x.shape[1])) if shape else np.full(x.shape[1], float(v))
 
     def nodal(self, u, name):
         """Owned nodal values of component `name`: (s, values[npoints, size]), sorted by s."""
