@@ -139,6 +139,8 @@ class InterfaceSchur:
         self.ready = True
 
     def apply(self, pc, b, x):
+        """x = A^{-1} b; a singular A (no finite solution on some rank, or MUMPS refusing it) marks
+        the PC failed on every rank: Newton sees DIVERGED_LINEAR_SOLVE, not a PETSc error."""
         if self.failed:
             x.set(np.nan)
             return
@@ -146,6 +148,16 @@ class InterfaceSchur:
             # a context made afresh by the options (Newton's settings applied again after a failed
             # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
             self.setUp(pc)
+        try:
+            self._apply(b, x)
+        except PETSc.Error:   # MUMPS (the fallback) on a singular matrix
+            x.set(np.nan)
+        with np.errstate(invalid="ignore"):
+            finite = bool(np.all(np.isfinite(x.getArray(readonly=True))))
+        if not self.comm.allreduce(finite, op=MPI.LAND):
+            petsc_raw.pc_set_failed(pc)
+
+    def _apply(self, b, x):
         if self.fallback is not None:
             self.fallback.solve(b, x)
             return

@@ -125,3 +125,16 @@ def test_cli_static_then_run_from_the_equilibrium(tmp_path):
     H = np.array([float(r["H"]) for r in rows])
     assert len(rows) == 21 and tip[0] < -1e-4                      # it sags ...
     assert np.max(np.abs(tip - tip[0])) <= 1e-12 and np.max(np.abs(H - H[0])) <= 1e-9 * H[0]   # ... at rest
+
+
+@pytest.mark.mpi
+def test_a_singular_mechanism_fails_the_same_way_on_two_ranks(rodfem, tmp_path):
+    """The slider crank has no unique static equilibrium: serial and `mpirun -n 2` both end with
+    exit 3 and the one line naming the singular tangent (two ranks used to report MUMPS's
+    INFOG(1) = -3 as a PETSc error, exit 2, blaming the user's options)."""
+    for np_ in (None, 2):
+        p = rodfem("static", "slider-crank-3d", "--out", tmp_path / f"np{np_}", np=np_, timeout=300)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 3, p.stderr[-2000:]
+        assert lines == ["rodfem: error: static solve failed at load factor 0: the tangent matrix is singular "
+                         "(DIVERGED_LINEAR_SOLVE): a free rigid motion or a mechanism has no unique equilibrium"]
