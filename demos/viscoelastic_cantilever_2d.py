@@ -31,7 +31,7 @@ import numpy as np
 
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
-from rodfem.app.scene import Parameter, Scene, stiffness
+from rodfem.app.scene import Parameter, Scene, relaxation_time
 from rodfem.demos import cantilever_2d
 from rodfem.demos._planar import MATERIALS
 from rodfem.forms import planar_beam
@@ -48,7 +48,7 @@ parameters = cantilever_2d.parameters + [
     branch_stiffness("EA1", "EA", "Maxwell branch axial stiffness"),
     branch_stiffness("GA1", "GA", "Maxwell branch shear stiffness"),
     branch_stiffness("EI1", "EI", "Maxwell branch bending stiffness"),
-    stiffness("tau1", 0.02, "s", "Maxwell branch relaxation time"),
+    relaxation_time("tau1", 0.02, "Maxwell branch relaxation time (inf: a parallel spring)"),
 ]
 
 

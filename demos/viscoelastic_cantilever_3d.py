@@ -38,7 +38,7 @@ import numpy as np
 
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
-from rodfem.app.scene import Parameter, Scene, common, stiffness
+from rodfem.app.scene import Parameter, Scene, common, relaxation_time, stiffness
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod
 
@@ -49,7 +49,7 @@ parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     Parameter("nu", 0.35, "", "Poisson's ratio (G = E/(2(1 + nu)))", low=0, high=0.5),
     stiffness("rho", 2850.0, "kg/m^3", "density"),
     Parameter("E1", 7.2e9, "Pa", "Maxwell branch modulus (0: elastic rod)", low=0),
-    stiffness("tau1", 0.05, "s", "Maxwell branch relaxation time"),
+    relaxation_time("tau1", 0.05, "Maxwell branch relaxation time (inf: a parallel spring)"),
     Parameter("M1", 0.25, "N m", "peak tip torque about the axis d1 (body frame)"),
     Parameter("F2", 1.0, "N", "peak tip force on d2 (body frame)"),
     Parameter("F3", 1.0, "N", "peak tip force on d3 (body frame)"),

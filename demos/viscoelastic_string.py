@@ -41,7 +41,7 @@ import numpy as np
 
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
-from rodfem.app.scene import Parameter, Scene, common, stiffness
+from rodfem.app.scene import Parameter, Scene, common, relaxation_time, stiffness
 from rodfem.demos._string_statics import static_equilibrium
 from rodfem.demos.hanging_cable import hanging_guess, material_parameters
 from rodfem.forms.string import MATERIALS, String, maxwell
@@ -50,7 +50,7 @@ parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-grad
     material_parameters(EA=10.0) + [
     Parameter("EA1", 10.0, "N", "Maxwell branch small-strain stiffness (same law as the material; 0: elastic)",
               low=0),
-    stiffness("tau1", 0.02, "s", "Maxwell branch relaxation time"),
+    relaxation_time("tau1", 0.02, "Maxwell branch relaxation time (inf: a parallel spring)"),
     stiffness("L", 1.0, "m", "reference (unstretched) length"),
     Parameter("g", 9.81, "m/s^2", "gravity, acting in -z", low=0),
     Parameter("Fx", 1.0, "N", "amplitude of the force on the top node (rhoA x 1 m/s^2 in Paper 4)"),

@@ -26,6 +26,7 @@ class Parameter:
     high: Optional[float] = None
     low_open: bool = False            # True: value > low, False: value >= low
     choices: Optional[tuple] = None
+    infinite: bool = False            # True: +inf is allowed too (a limit that has a meaning)
 
     @property
     def kind(self):
@@ -38,7 +39,7 @@ class Parameter:
         if self.low is not None and self.high is not None:
             return f"{what} in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
         if self.low is not None:
-            return f"{what} {'>' if self.low_open else '>='} {self.low:g}"
+            return f"{what} {'>' if self.low_open else '>='} {self.low:g}{' (inf allowed)' if self.infinite else ''}"
         return what
 
     def parse(self, text):
@@ -64,7 +65,8 @@ class Parameter:
             return
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
-        bad = not math.isfinite(value) or (self.kind is int and value != int(value))
+        bad = not (math.isfinite(value) or (self.infinite and value == math.inf))
+        bad |= self.kind is int and not bad and value != int(value)
         if self.low is not None:
             bad |= value <= self.low if self.low_open else value < self.low
         if self.high is not None:
@@ -89,6 +91,11 @@ def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
 
 def stiffness(name, default, unit, doc):
     return Parameter(name, default, unit, doc, low=0, low_open=True)
+
+
+def relaxation_time(name, default, doc):
+    """A dashpot's relaxation time tau > 0 in s; inf: no dashpot (the branch is a parallel spring)."""
+    return Parameter(name, default, "s", doc, low=0, low_open=True, infinite=True)
 
 
 def density(name, default, unit, doc):

@@ -521,3 +521,24 @@ def test_mpi_two_ranks_match_serial(tmp_path):
         scale = max(np.max(np.abs(a[col])), 1e-300)
         assert np.max(np.abs(a[col] - b[col])) <= 1e-8 * scale, col
     assert a["dissipated"][-1] > 0
+
+
+def test_tau_inf_from_the_command_line_is_the_parallel_spring(tmp_path):
+    """`--set tau1=inf` (the README's parallel spring; it was refused) runs cantilever-2d with the
+    summed stiffnesses EA + EA1, GA + GA1, EI + EI1: the same tip history, nothing dissipated;
+    -inf and nan stay refused."""
+    from processes import history
+
+    from rodfem.app.cli import main
+    common = ["--set", "t_end=0.1", "--set", "n_elements=6", "--quiet"]
+    assert main(["run", "viscoelastic-cantilever-2d", "--set", "tau1=inf", *common, "--out", str(tmp_path / "v")]) == 0
+    summed = [f"{k}={float(v) * 1.1!r}" for k, v in (("EA", 21e6), ("GA", 6.73e6), ("EI", 175.0))]
+    assert main(["run", "cantilever-2d", *sum((["--set", s] for s in summed), []), *common,
+                 "--out", str(tmp_path / "e")]) == 0
+    a, b = history(tmp_path / "v"), history(tmp_path / "e")
+    assert np.max(a["dissipated"]) == 0.0
+    for k in ("tip_x", "tip_y", "H"):
+        assert np.max(np.abs(a[k] - b[k])) <= 1e-12 * np.max(np.abs(b[k])), k
+    for bad in ("-inf", "nan"):
+        assert main(["run", "viscoelastic-cantilever-2d", "--set", f"tau1={bad}", *common,
+                     "--out", str(tmp_path / "x")]) == 2
