@@ -74,6 +74,12 @@ def agreed(comm):
         raise InputError(first)
 
 
+def out_of_memory(error):
+    """InputError for a MemoryError: the size asked for does not fit in this machine's memory."""
+    return InputError(f"out of memory ({error or 'MemoryError'}): use fewer elements, or more ranks on more "
+                      "machines")
+
+
 def petsc_error(error, what):
     """InputError for an error PETSc raised (a refused option, a solver package it lacks, no memory):
     what failed, PETSc's last message line (the reason) and PETSC_OPTIONS."""

@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from rodfem.app.scene import load, scenes
 from rodfem.common import interrupts
-from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
+from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError, out_of_memory
 
 comm = MPI.COMM_WORLD
 
@@ -199,6 +199,8 @@ def main(argv=None):
         return fail(f"rodfem: error: {e}{kept(args)}", 3)
     except Interrupted as e:
         return fail(f"rodfem: {e}{kept(args)}", e.exit_code)
+    except MemoryError as e:
+        return fail(f"rodfem: error: {out_of_memory(e)}", 2)
     except Exception:
         if comm.size > 1:  # a bug: abort every rank rather than leave the others waiting
             traceback.print_exc()

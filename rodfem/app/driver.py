@@ -8,8 +8,8 @@ from mpi4py import MPI
 from rodfem.analysis.timeloop import Result, run, steps_for
 from rodfem.app.scene import Scene, load
 from rodfem.common import interrupts
-from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
-from rodfem.io.output import OutDir, RunWriter, summarize, write_json
+from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError, out_of_memory
+from rodfem.io.output import OutDir, RunWriter, plotting, summarize, write_json
 
 STOPS = (NewtonFailure, Interrupted, InputError)
 
@@ -43,6 +43,8 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         n_steps = steps_for(p["dt"], p["t_end"])
     except ValueError as e:
         raise ParameterError(f"parameter 'dt': {e}") from None
+    if out:
+        plotting()   # the pictures can be drawn: known before the directory is touched
     outdir = OutDir(out, comm) if out else None
     started = {"scene": scene.name, "status": "running", "parameters": p, "mpi_ranks": comm.size,
                "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
@@ -67,12 +69,15 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
             if not (start and start.step == n_steps):   # a checkpoint at t_end: nothing left to run
                 run(problem, p["dt"], p["t_end"], writer=writer, progress=progress, result=result, start=start,
                     after_step=saver)
-        except STOPS as stop:
+        except (*STOPS, MemoryError) as error:
+            stop = out_of_memory(error) if isinstance(error, MemoryError) else error
             status, failure = stopped(stop)
             if writer:
-                with suppress(InputError):  # after an output error, keep what can still be written
+                with suppress(InputError, MemoryError):  # after an output error, keep what can still be written
                     writer.finish(summarize(scene.name, p, problem, result, status, failure), result)
-            raise
+            if stop is error:
+                raise
+            raise stop from None
         summary = summarize(scene.name, p, problem, result)
         if writer:
             writer.finish(summary, result)
@@ -102,6 +107,8 @@ def build(scene, p, comm, outdir=None, started=None):
     except Exception as error:
         if interrupts.received():  # whatever the compiler's death looked like
             stop = Interrupted(interrupts.received())
+        elif isinstance(error, MemoryError):
+            stop = out_of_memory(error)
         elif isinstance(error, STOPS):
             stop = error
         else:

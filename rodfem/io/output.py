@@ -157,11 +157,23 @@ def frame_levels(n_steps, frames):
     return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
 
 
+def plotting():
+    """matplotlib.pyplot with the Agg backend; InputError if it cannot be loaded (e.g. no memory left)."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except (ImportError, MemoryError) as e:
+        raise InputError(f"cannot load matplotlib for the pictures ({type(e).__name__}: {e})") from None
+    return plt
+
+
 class RunWriter:
     """Writes a run into a claimed OutDir: history rows, frames (centreline, surface), and at the end
     summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
 
     def __init__(self, out, problem, n_steps, frames=100, section=0.0):
+        plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
         self.levels = frame_levels(n_steps, frames)
         self.views = [BodyView(name, body) for name, body in problem.body_items()]
@@ -178,12 +190,25 @@ class RunWriter:
         self.count += 1
 
     def _append(self, row):
+        """One whole row of history.csv: a write that fails (a full disk) leaves the file at the end of
+        the last whole row, never half a row."""
         if self._csv is None:
             self._file = open(self.out.file("history.csv"), "w", newline="")
             self._csv = csv.DictWriter(self._file, fieldnames=list(row))
             self._csv.writeheader()
-        self._csv.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
-        self._file.flush()
+            self._file.flush()
+            self._whole = self._file.tell()
+        try:
+            self._csv.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+            self._file.flush()
+        except OSError:
+            file, self._file, self._csv = self._file, None, None
+            with suppress(OSError):
+                file.close()   # (writes what it can of the row left in its buffer: cut off next)
+            with open(self.out.file("history.csv"), "r+") as f:
+                f.truncate(self._whole)
+            raise
+        self._whole = self._file.tell()
 
     def frame(self, t):
         states = [view.gather() for view in self.views]  # collective
@@ -277,9 +302,7 @@ def summarize(scene_name, params, problem, result, status="completed", failure=N
 
 
 def plot_energy(path, result):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = plotting()
     t, H, W = result.column("t"), result.column("H"), result.column("supplied")
     err = np.abs(result.column("balance_error"))[1:]
     dissipates = "dissipated" in result.rows[0]

@@ -257,3 +257,26 @@ def test_two_ranks_write_the_serial_bytes(tmp_path):
             for k in x:
                 assert np.allclose(x[k].values, y[k].values, rtol=1e-11, atol=1e-11), (name, k)
     assert gif_frames(tmp_path / "p" / "animation.gif") == 3
+
+
+def test_a_full_disk_leaves_whole_rows_in_the_history(tmp_path):
+    """Files limited to 12 kB (as on a full disk: history.csv reaches it first): the run ends with
+    one line (exit 2), and history.csv holds whole rows only, each with every column (the row that
+    did not fit is cut off, not left half written)."""
+    import subprocess
+    import sys
+
+    from processes import environment
+    out = tmp_path / "out"
+    args = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=10", "--set", "dt=0.01",
+            "--quiet", "--out", str(out)]
+    code = ("import resource, sys\nfrom rodfem.app.cli import main\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (12000, 12000))\n"
+            f"sys.exit(main({args!r}))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment(), timeout=120)
+    assert p.returncode == 2 and "cannot write history.csv" in p.stderr, p.stderr[-2000:]
+    text = (out / "history.csv").read_text()
+    assert text.endswith("\n") and 1000 < len(text) <= 12000
+    lines = text.splitlines()
+    assert all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
+    np.array([[float(v) for v in line.split(",")] for line in lines[1:]])   # every value a number
