@@ -226,12 +226,16 @@ class Statics:
             dmu = min(2.0 * d, 1.0) if adaptive and solved.iterations <= 4 else d
         self._set(x_cur)
         self.set_load(1.0, t)
-        self._commit()
+        self._commit(t)
         return res
 
-    def _commit(self):
-        """x_n = x_{n+1} = the equilibrium (the time loop starts from it)."""
+    def _commit(self, t):
+        """x_n = x_{n+1} = the equilibrium (the time loop starts from it); the joints' read-out
+        (constraint_residual) at time t, where the driven joints hold."""
         self.target.set_state(self.unknown)
+        points = getattr(self.target, "points", None)
+        if points is not None:
+            points.step(self.target.X0, t, t, points.times[2])
 
 
 def solve(target, t: float = 0.0, steps: int = 1, adaptive: bool = True, options: Optional[dict] = None):

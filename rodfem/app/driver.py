@@ -98,12 +98,13 @@ def checkpoint_every(value, out):
 
 
 def build(scene, p, comm, outdir=None, started=None):
-    """scene.build(p, comm); when it fails, summary.json says why (status "error" or "interrupted").
+    """scene.build(p, comm), built (forms compiled, joints bound and checked); when it fails,
+    summary.json says why (status "error" or "interrupted").
 
     A compilation killed by a Ctrl-C (the C compiler gets the signal too) counts as the interrupt.
     """
     try:
-        return scene.build(p, comm)
+        return scene.build(p, comm).build()
     except Exception as error:
         if interrupts.received():  # whatever the compiler's death looked like
             stop = Interrupted(interrupts.received())
