@@ -182,9 +182,12 @@ class RigidSpace(StateSpace):
                 else np.zeros((3, 0)))
 
     def assign(self, u, name, value):
-        """Set field `name` of u to `value` (a callable x -> values, evaluated at the cell's midpoint)."""
+        """Set field `name` of u to `value` (a callable x -> values, evaluated at the cell's midpoint,
+        or a constant)."""
         if isinstance(value, ufl.core.expr.Expr):
             return super().assign(u, name, value)
+        if not callable(value):
+            value = self._constant(name, value)
         dofs = self.field_dofs(name)
         if len(dofs):
             u.x.array[dofs] = np.asarray(value(self._midpoint()), dtype=float).reshape(-1)

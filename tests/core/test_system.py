@@ -219,3 +219,32 @@ def test_driven_joint_is_an_input_port():
     assert np.max(res.column("constraint_residual")) <= 1e-13  # the hub angle is theta(t) exactly
     assert np.any(np.abs(res.column("hub.lambda1")) > 0.1)    # the drive torque (the port's output)
     assert hub.size == 1
+
+
+def test_two_point_masses_under_a_domain_load_follow_the_closed_form():
+    """Two free 2D point masses (m = 1 and 2, constant initial values) under the domain force
+    (0, -9.81) each: the midpoint rule is exact for a constant force, so x, p and L_z = sum m x ^ v
+    equal the parabolas' to round-off (L_z(1) = -4.905 - 7.81).  Run in a child process too: it
+    ended with a PETSc SEGV at exit (rc 59) before."""
+    from rodfem.forms.rigid_body import PointMass
+    s = System()
+    g = [0.0, -9.81]
+    s.add("a", PointMass(1.0, dim=2), initial={"x": (0.0, 0.0), "v": (1.0, 0.0)}, loads=[Load("v", g, "domain")])
+    s.add("b", PointMass(2.0, dim=2), initial={"x": (1.0, 0.0), "v": (0.0, 1.0)}, loads=[Load("v", g, "domain")])
+    res = run(s, 0.1, 1.0)
+    t = res.column("t")
+    p_y = 2.0 - 2 * 9.81 * t
+    L_z = -4.905 * t**2 + 2 * (1.0 - 4.905 * t)   # a: x ^ v = -g t^2 / 2; b: 2 (1 - g t / 2)
+    assert np.max(np.abs(res.column("p_x") - 1.0)) <= 1e-12
+    assert np.max(np.abs(res.column("p_y") - p_y)) <= 1e-12
+    assert np.max(np.abs(res.column("L_z") - L_z)) <= 1e-12
+    code = ("from rodfem import Load, System, run\nfrom rodfem.forms.rigid_body import PointMass\ns = System()\n"
+            "for n, m, x, v in (('a', 1.0, (0, 0), (1, 0)), ('b', 2.0, (1, 0), (0, 1))):\n"
+            "    s.add(n, PointMass(m, dim=2), initial={'x': x, 'v': v}, loads=[Load('v', [0, -9.81], 'domain')])\n"
+            "run(s, 0.1, 1.0)\n")
+    import subprocess
+    import sys
+
+    from processes import environment
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment(), timeout=300)
+    assert p.returncode == 0, p.stderr[-2000:]
