@@ -254,10 +254,21 @@ class PlanarBeam:
         return planar_directors(np.asarray(q["phi"], dtype=float).reshape(-1))
 
     def outputs(self, x):
-        """The strains (the state's) and the stress resultants N = dW/dGamma, M = dW/dkappa (UFL)."""
-        G, k = ufl.variable(x["Gamma"]), ufl.variable(x["kappa"])
-        W = self.energy(G, k)
-        return {"Gamma": x["Gamma"], "kappa": x["kappa"], "N": ufl.diff(W, G), "M": ufl.diff(W, k)}
+        """The strains (the state's) and the stress resultants N = dW/dGamma + sum_j dW_j/dGamma_j,
+        M = dW/dkappa + sum_j dW_j/dkappa_j (UFL): the equilibrium branch's plus every Maxwell
+        branch's (parallel branches: the stresses add)."""
+        N, M = self._stress(self.energy, x["Gamma"], x["kappa"])
+        for j, b in enumerate(self.branches, 1):
+            Nj, Mj = self._stress(b.spring, x[f"Gamma_{j}"], x[f"kappa_{j}"])
+            N, M = N + Nj, M + Mj
+        return {"Gamma": x["Gamma"], "kappa": x["kappa"], "N": N, "M": M}
+
+    @staticmethod
+    def _stress(energy, Gamma, kappa):
+        """(dW/dGamma, dW/dkappa) of the energy density W(Gamma, kappa)."""
+        G, k = ufl.variable(Gamma), ufl.variable(kappa)
+        W = energy(G, k)
+        return ufl.diff(W, G), ufl.diff(W, k)
 
     def compatible_strains(self, x):
         """Gamma = A^T d_s r - e1, kappa = d_s phi."""

@@ -280,3 +280,29 @@ def test_a_full_disk_leaves_whole_rows_in_the_history(tmp_path):
     lines = text.splitlines()
     assert all(len(line.split(",")) == len(lines[0].split(",")) for line in lines)
     np.array([[float(v) for v in line.split(",")] for line in lines[1:]])   # every value a number
+
+
+def test_planar_stress_resultants_include_the_maxwell_branches(tmp_path):
+    """The arc beam with a Maxwell branch (EA1, GA1, EI1 = 30, 20, 0.5; tau = 0.05): the exported
+    N and M are the equilibrium spring's plus the branch's, N = (EA, GA) Gamma + (EA1, GA1) Gamma_1,
+    M = EI kappa + EI1 kappa_1, from the state's own strains (they left the branch out, while the
+    3D rod's included it)."""
+    from rodfem.forms.planar_beam import PlanarBeam, maxwell, quadratic
+    beam = PlanarBeam(1.0, 0.1, quadratic(EA=100.0, GA=50.0, EI=2.0),
+                      branches=[maxwell(0.05, EA=30.0, GA=20.0, EI=0.5)])
+    initial = {"r": lambda x: np.vstack([R_ARC * np.sin(x[0] / R_ARC), R_ARC * (1 - np.cos(x[0] / R_ARC))]),
+               "phi": lambda x: x[0] / R_ARC}
+    problem = Problem(beam, L_ARC, N_ARC, initial=initial, comm=COMM)
+    write_run(problem, tmp_path, 0.01, 0.2, frames=2)
+    surf = read_vtp(tmp_path / "surface" / "frame_00001.vtp")
+    N, M = surf.cell_data["N"].values[1:-1:4], surf.cell_data["M"].values[1:-1:4]
+    S = problem.space
+
+    def cells(name, size):
+        V, dofs = S.collapse(name)
+        order = np.argsort(V.tabulate_dof_coordinates()[:, 0])
+        return problem.x0.x.array[dofs].reshape(-1, size)[order]
+    G, k, G1, k1 = cells("Gamma", 2), cells("kappa", 1)[:, 0], cells("Gamma_1", 2), cells("kappa_1", 1)[:, 0]
+    assert np.max(np.abs(G1)) > 1e-4 and np.max(np.abs(k1)) > 1e-3     # the branch carries stress
+    assert np.allclose(N, G * [100.0, 50.0] + G1 * [30.0, 20.0], rtol=1e-12, atol=1e-14)
+    assert np.allclose(M, 2.0 * k + 0.5 * k1, rtol=1e-12, atol=1e-14)
