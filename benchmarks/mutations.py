@@ -17,7 +17,8 @@ this).  A mutation is caught when at least one of its tests fails; the table say
 Writes benchmarks/mutations.md (or --out) and exits non-zero if any mutation survived, could not be
 applied, or broke the test run itself.  Run it before closing any issue that touches physics or
 the engine; a new model (multibody, viscoelasticity, actuators) adds its own mutations here.
-The JIT cache (~/.cache/fenics) is shared: a mutated form compiles once under its own key.
+Each run has a private JIT cache, a copy of the user's (~/.cache/fenics): a mutated form compiles once
+under its own key there, and the user's cache is left as it was.
 """
 import argparse
 import os
@@ -283,9 +284,26 @@ def copy_tree(dest, ref=None):
             shutil.copy2(src, os.path.join(dest, f))
 
 
+CACHE = None   # the run's private JIT cache (XDG_CACHE_HOME), made in main()
+
+
+def private_cache():
+    """A JIT cache of this run's own, seeded with the user's compiled forms: mutated forms compile
+    into it one at a time (several processes compiling into one shared cache gave spurious gcc
+    and FileNotFound failures), and the user's cache gets none of them."""
+    cache = tempfile.mkdtemp(prefix="rodfem-mut-cache-")
+    user = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "fenics")
+    if os.path.isdir(user):
+        shutil.copytree(user, os.path.join(cache, "fenics"), ignore=shutil.ignore_patterns("*.lock"))
+    return cache
+
+
 def environment(copy):
-    return dict(os.environ, PYTHONPATH=copy + os.pathsep + os.environ.get("PYTHONPATH", ""), OMP_NUM_THREADS="1",
-                OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    env = dict(os.environ, PYTHONPATH=copy + os.pathsep + os.environ.get("PYTHONPATH", ""), OMP_NUM_THREADS="1",
+               OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    if CACHE:
+        env["XDG_CACHE_HOME"] = CACHE
+    return env
 
 
 PROBE = """
@@ -420,6 +438,16 @@ def main(argv=None):
             for t in m.tests:
                 print(f"{'':38s}   {t}")
         return 0
+    global CACHE
+    CACHE = private_cache()
+    try:
+        return check(chosen, args, argv)
+    finally:
+        shutil.rmtree(CACHE, ignore_errors=True)
+
+
+def check(chosen, args, argv):
+    """Run the chosen mutations; the table; 0 if every one was caught."""
     probe = tempfile.mkdtemp(prefix="rodfem-mut-probe-")
     try:
         copy_tree(probe, args.ref)
