@@ -202,6 +202,7 @@ class Statics:
             for start in starts:
                 self._set(start)
                 self.set_load(mu + d, t)
+                self._fit_multipliers()
                 try:
                     solved = self.newton.solve(k + 1, mu + d)
                     break
@@ -228,6 +229,35 @@ class Statics:
         self.set_load(1.0, t)
         self._commit(t)
         return res
+
+    def _fit_multipliers(self):
+        """lambda <- argmin |F(x, lambda)| at the current x: F is affine in lambda (the reactions
+        G(q)^T lambda on the momentum rows), so n_lambda + 1 residuals give the fit exactly.  A
+        mechanism held only by its joints (a hanging pendulum of point masses) has a singular
+        tangent at lambda = 0 (its stiffness is lambda . Q); from the fitted reactions Newton starts
+        with the right one."""
+        layout = self.target.layout
+        n = layout.n_multipliers
+        if not n:
+            return
+        at = layout.multipliers - layout.start if self.comm.rank == 0 else np.zeros(0, dtype=int)
+        b = self.unknown.duplicate()
+
+        def residual(lam):
+            self.unknown.getArray()[at] = lam
+            self.assembler.residual(self.unknown, b)
+            return np.concatenate(self.comm.allgather(b.getArray(readonly=True).copy()))
+        r0 = residual(np.zeros(len(at)))
+        columns = []
+        for i in range(n):
+            columns.append(residual(np.eye(n)[i] if len(at) else np.zeros(0)) - r0)
+        lam = np.linalg.lstsq(np.column_stack(columns), -r0, rcond=None)[0]
+        self.unknown.getArray()[at] = lam if len(at) else np.zeros(0)
+        b.destroy()
+
+    @property
+    def comm(self):
+        return self.target.comm
 
     def _commit(self, t):
         """x_n = x_{n+1} = the equilibrium (the time loop starts from it); the joints' read-out

@@ -48,11 +48,13 @@ b_I and M z = e_g gives z = [-Z e_g; e_g].  A local block that MUMPS cannot fact
 import atexit
 import gc
 import time
+import warnings
 import weakref
 
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
+from scipy.linalg import LinAlgWarning
 
 from rodfem.fem import petsc_raw
 from rodfem.la.partial_lu import PartialLU
@@ -149,7 +151,9 @@ class InterfaceSchur:
             # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
             self.setUp(pc)
         try:
-            self._apply(b, x)
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", LinAlgWarning)
+                self._apply(b, x)
         except PETSc.Error:   # MUMPS (the fallback) on a singular matrix
             x.set(np.nan)
         with np.errstate(invalid="ignore"):
@@ -357,7 +361,9 @@ class InterfaceSchur:
         else:
             ok = self._factor_with_columns(A)
         if ok and self.nG:
-            self.S_lu = lu_factor(self.S)
+            with warnings.catch_warnings():   # a singular S: apply() finds the non-finite solution
+                warnings.simplefilter("ignore", LinAlgWarning)
+                self.S_lu = lu_factor(self.S)
         return ok
 
     def _factor_partial(self, A):

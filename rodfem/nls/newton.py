@@ -18,7 +18,10 @@ from the PETSc options database with the prefix ``rodfem_`` (e.g.
 ``PETSC_OPTIONS="-rodfem_snes_atol 1e-12"``; MUMPS in parallel:
 ``-rodfem_pc_type lu -rodfem_pc_factor_mat_solver_type mumps``).
 """
+import atexit
+import itertools
 import time
+import weakref
 from dataclasses import dataclass
 
 from petsc4py import PETSc
@@ -55,6 +58,21 @@ class Solve:
 
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+_LIVE = weakref.WeakSet()
+_COUNTER = itertools.count()   # the Newtons alive: their SNES are destroyed before PETSc finalizes
+
+
+@atexit.register   # registered after petsc4py's finalization, so it runs before it
+def _destroy_solvers():
+    """Destroy the SNES of every Newton still alive at exit (a script's global System), collectively,
+    while Python still runs: PETSc's finalization would otherwise destroy a parallel solver's
+    Python preconditioner (rodfem/la/schur.py) by calling back into a finished interpreter
+    (a segmentation fault at exit, after the results)."""
+    if PETSc.Sys.isInitialized() and not PETSc.Sys.isFinalized():
+        for newton in sorted(_LIVE, key=lambda nw: nw.serial):
+            if newton.snes is not None:
+                newton.snes.destroy()
+                newton.snes = None
 
 
 class Newton:
@@ -81,6 +99,8 @@ class Newton:
         self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
         self.snes = None
         self.restart()
+        self.serial = next(_COUNTER)   # the order of creation: the same on every rank
+        _LIVE.add(self)
         self._work, self._start = self.xv.duplicate(), self.xv.duplicate()
 
     def restart(self):
