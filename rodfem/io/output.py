@@ -158,7 +158,11 @@ def frame_levels(n_steps, frames):
 
 
 def plotting():
-    """matplotlib.pyplot with the Agg backend; InputError if it cannot be loaded (e.g. no memory left)."""
+    """matplotlib.pyplot with the Agg backend; InputError if it cannot be loaded (e.g. no memory left).
+    (Its warning about an unwritable config directory, e.g. XDG_CACHE_HOME on a file, stays unsaid:
+    a cache rodfem needs is reported by rodfem, in one line.)"""
+    import logging
+    logging.getLogger("matplotlib").setLevel(logging.ERROR)
     try:
         import matplotlib
         matplotlib.use("Agg")
