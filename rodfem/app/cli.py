@@ -130,6 +130,9 @@ def cmd_modes(args):
         f"{info['n_states']} states, residuals <= {max(info['residuals']):.1e})")
     if info["fallback"]:
         say(f"(the SLEPc result was not verified: {info['fallback']}; solved dense instead)")
+    if info["eigensolver"].get("rejected_below_rad_s"):
+        say(f"(an eigenvalue at {info['eigensolver']['rejected_below_rad_s']:.6g} rad/s, below the last mode, failed "
+            "the residual check and is not listed)")
     say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s} {'damping':>10s}")
     for k, w in enumerate(omega):
         say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g} {info['damping_ratio'][k]:10.3g}")

@@ -199,15 +199,16 @@ def dense_modes(p, k):
     growing = int(np.sum((w.imag > OSCILLATORY * np.abs(w)) & (w.real > GROWTH * np.abs(w))))
     candidates = np.sort_complex(w[oscillating(w)] * -1j) * 1j          # ascending Im s
     rng = np.random.default_rng(12)
-    keep, failed = [], 0
+    keep, failed, lowest = [], 0, np.inf
     for start in range(0, len(candidates), k):                           # k at a time: failures need more
         random = [rng.standard_normal(p.n) + 1j * rng.standard_normal(p.n) for _ in candidates[start:start + k]]
-        more, fails, _ = p.verified(list(zip(candidates[start:start + k], random)), k - len(keep))
-        keep, failed = keep + more, failed + fails
+        more, fails, low = p.verified(list(zip(candidates[start:start + k], random)), k - len(keep))
+        keep, failed, lowest = keep + more, failed + fails, min(lowest, low)
         if len(keep) == k or failed > k + 20:
             break
     info = {"solver": "dense", "finite_eigenvalues": len(w), "real_eigenvalues": int(np.sum(real)),
-            "growing_oscillations": growing, "oscillations": len(candidates), "rejected": failed}
+            "growing_oscillations": growing, "oscillations": len(candidates), "rejected": failed,
+            "rejected_below_rad_s": float(lowest) if keep and lowest < keep[-1][0].imag else None}
     return p.modes(keep, info)
 
 
