@@ -43,9 +43,14 @@ of the rate rows, e.g. C_N N - Pi Gamma(q)), which would swamp a
 shift-invert solver; so modes use the pencil (A_m, E_m) of the same model
 with the total-form rows of statics in place of the rate rows (strains
 algebraic: E_m = 0 on them; constraints on position level): the same
-nonzero spectrum without those zeros.  Solved with SLEPc (shift-invert
-about `target`, Krylov-Schur, SuperLU) or, for at most `DENSE_MAX` dofs or
-without slepc4py, with scipy's dense QZ (`solver='dense'`).
+nonzero spectrum without those zeros.  Solved (rodfem/la/pencil.py) with
+scipy's dense QZ for at most `DENSE_MAX` states or without slepc4py, else
+with SLEPc: Krylov-Schur on (A_m - sigma E_m)^-1 E_m, sigma > 0, for the
+eigenvalues of largest imaginary part, i.e. the oscillations, which neither
+the infinite eigenvalues of the constraints nor the real ones (a mechanism's
+zeros, the relaxation cluster of a viscoelastic model) can crowd out.  Every
+returned pair is verified by its residuals; a SLEPc result that is not is
+replaced by the dense one up to `DENSE_FALLBACK_MAX` states, else refused.
 
 Serial only (the exported matrices are assembled on one rank).  Systems: the bodies' blocks
 and the joints' rows (module `Linearization`); a joint's drive is not an input of the linear model.
@@ -55,13 +60,14 @@ import scipy.sparse as sp
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
-from mpi4py import MPI
 
 from rodfem.analysis.statics import RestStep, rest_form
 from rodfem.errors import ParameterError
 from rodfem.fem.jit import compile_forms
+from rodfem.la.pencil import SHIFT, NotVerified, Pencil, SingularPencil, dense_modes, slepc_modes
 
-DENSE_MAX = 1500
+DENSE_MAX = 1500            # auto: scipy's dense QZ up to this many states, SLEPc above
+DENSE_FALLBACK_MAX = 2000   # a SLEPc result that is not verified: dense QZ up to this many states (~80 s here), else refused
 
 
 def _csr(A):
@@ -365,31 +371,50 @@ def _clean(M, scale):
 
 # -- natural modes ----------------------------------------------------------------------------
 
-def natural_modes(lin, k=6, solver="auto", target=0.0):
+def natural_modes(lin, k=6, solver="auto", target=SHIFT):
     """The k lowest natural angular frequencies omega (rad/s: the imaginary parts of the eigenvalues
-    s = -zeta |s| + i omega, the damped frequencies of a dissipating model) and mode vectors
-    (complex, retained dofs) of the pencil (A_m, E_m).  Returns (omega, vectors, solver used);
-    `lin.damping` holds the damping ratios zeta = -Re s / |s| of the modes (0 without dissipation)."""
+    s = -zeta |s| + i omega of A_m x = s E_m x, the damped frequencies of a dissipating model) and mode
+    vectors (complex, retained dofs).  Returns (omega, vectors, solver used).
+
+    Every pair is verified (rodfem/la/pencil.py: backward error and the test that rejects the
+    roundoff images of infinite eigenvalues); no unverified pair is returned.  'dense': QZ of the
+    whole pencil; 'slepc': Krylov-Schur on (A_m - target E_m)^-1 E_m (target: a real shift > 0 in
+    rad/s); 'auto': dense up to DENSE_MAX states.  A SLEPc result that cannot be certified is
+    replaced by the dense one up to DENSE_FALLBACK_MAX states, else refused (ParameterError).
+    `lin.damping` holds zeta = -Re s / |s| (0 without dissipation), `lin.modes_info` how they were
+    found (solver, fallback, residuals, eigenvalue counts, the SLEPc band)."""
     n = lin.Em.shape[0]
+    if solver not in ("auto", "dense", "slepc"):
+        raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
+    if not (np.isfinite(target) and target > 0):
+        raise ParameterError(f"the modes shift (target) must be a number > 0 in rad/s (got {target!r})")
+    if solver == "slepc" and not _have_slepc():
+        raise ParameterError("--solver slepc needs slepc4py (not installed); use --solver dense")
     if solver == "auto":
         solver = "dense" if n <= DENSE_MAX or not _have_slepc() else "slepc"
-    if solver == "dense":
-        import scipy.linalg
-        w, V = scipy.linalg.eig(lin.Am.toarray(), lin.Em.toarray())
-        ok = np.isfinite(w)
-        w, V = w[ok], V[:, ok]
-    elif solver == "slepc":
-        w, V = _slepc(lin.Am, lin.Em, k, target)
-    else:
-        raise ParameterError(f"modes solver must be one of auto, dense, slepc (got {solver!r})")
-    scale = max(np.max(np.abs(w.imag)), 1.0) if len(w) else 1.0
-    # oscillating and not growing (the rest: the infinite eigenvalues of the constraints, real ones)
-    keep = (w.imag > 1e-9 * scale) & (w.real <= 1e-6 * np.abs(w)) if len(w) else []
-    w, V = w[keep], V[:, keep]
-    order = np.argsort(w.imag)[:k]
-    w, V = w[order], V[:, order]
-    lin.damping = np.maximum(-w.real / np.abs(w), 0.0) if len(w) else np.zeros(0)
-    return w.imag, V, solver
+    p = Pencil(lin.Am, lin.Em)
+    modes, fallback = _slepc_or_fallback(p, k, target) if solver == "slepc" else (None, None)
+    modes = modes or dense_modes(p, k)
+    s = modes.s
+    lin.damping = np.maximum(-s.real / np.abs(s), 0.0) if len(s) else np.zeros(0)
+    lin.modes_info = dict(modes.info, fallback=fallback, residuals=[float(r) for r in modes.residuals])
+    return s.imag, modes.vectors, modes.info["solver"]
+
+
+def _slepc_or_fallback(p, k, shift):
+    """(Modes, None) from SLEPc, or (None, why) if its result is not verified and the dense
+    fallback may take the pencil; else ParameterError."""
+    try:
+        return slepc_modes(p, k, shift), None
+    except SingularPencil as e:
+        raise ParameterError(f"modes: the pencil (A_modes, E_modes) is singular ({e}): a motion the "
+                             "model leaves undetermined (an unconstrained multiplier or a free body)") from None
+    except NotVerified as why:
+        if p.n > DENSE_FALLBACK_MAX:
+            raise ParameterError(f"modes: the SLEPc result is not verified ({why}) and {p.n} states are more than "
+                                 f"the dense fallback takes (at most {DENSE_FALLBACK_MAX}); try a smaller "
+                                 "--count or fewer elements") from None
+        return None, str(why)
 
 
 def _have_slepc():
@@ -398,46 +423,6 @@ def _have_slepc():
         return True
     except ImportError:
         return False
-
-
-def _petsc(M):
-    from petsc4py import PETSc
-    M = sp.csr_matrix(M)
-    A = PETSc.Mat().createAIJ(size=M.shape, csr=(M.indptr.astype(PETSc.IntType), M.indices.astype(PETSc.IntType),
-                                                   M.data), comm=PETSc.COMM_SELF)
-    A.assemble()
-    return A
-
-
-def _slepc(Am, Em, k, target):
-    import slepc4py
-    slepc4py.init()
-    from slepc4py import SLEPc
-    A, B = _petsc(Am), _petsc(Em)
-    eps = SLEPc.EPS().create(comm=MPI.COMM_SELF)
-    eps.setOperators(A, B)
-    eps.setProblemType(SLEPc.EPS.ProblemType.GNHEP)
-    eps.setDimensions(nev=2 * k + 4)
-    eps.setTarget(target)
-    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
-    st = eps.getST()
-    st.setType(SLEPc.ST.Type.SINVERT)
-    ksp = st.getKSP()
-    ksp.setType("preonly")
-    pc = ksp.getPC()
-    pc.setType("lu")
-    pc.setFactorSolverType("superlu")
-    eps.setTolerances(1e-12, 500)
-    eps.solve()
-    vals, vecs = [], []
-    vr, vi = A.createVecs()
-    for i in range(eps.getConverged()):
-        lam = eps.getEigenpair(i, vr, vi)
-        vals.append(lam)
-        vecs.append(vr.getArray().copy() + 1j * vi.getArray().copy())
-    for obj in (eps, A, B, vr, vi):
-        obj.destroy()
-    return np.array(vals, dtype=complex), (np.column_stack(vecs) if vecs else np.zeros((Am.shape[0], 0), complex))
 
 
 def mode_shapes(lin, vectors):

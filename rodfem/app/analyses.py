@@ -11,6 +11,14 @@ from rodfem.errors import ParameterError
 
 # -- a scene's equilibrium, from the command line (rodfem static SCENE) -----------------------
 
+def finite_time(t):
+    """t as a float; --time nan or inf is refused (ParameterError, exit 2)."""
+    t = float(t)
+    if not np.isfinite(t):
+        raise ParameterError(f"--time must be a finite number (got {t})")
+    return t
+
+
 def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, comm=None):
     """The static equilibrium of `scene` under its inputs at time t (default: t_end, the full load).
 
@@ -35,7 +43,7 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     if not isinstance(scene, Scene):
         scene = load(scene)
     p = scene.values(overrides)
-    t = p["t_end"] if t is None else float(t)
+    t = p["t_end"] if t is None else finite_time(t)
     if steps < 1:
         raise ParameterError(f"--load-steps must be an integer >= 1 (got {steps})")
     outdir = OutDir(out, comm) if out else None
@@ -100,6 +108,7 @@ def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=
     comm = comm or MPI.COMM_WORLD
     if about not in ABOUT:
         raise ParameterError(f"--about must be one of {', '.join(ABOUT)} (got {about!r})")
+    t = finite_time(t)
     if comm.size > 1:
         raise ParameterError("linearize and modes run on one process (no mpirun)")
     if not isinstance(scene, Scene):
@@ -122,6 +131,7 @@ def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
     """`rodfem linearize`: the matrices into `out`; returns the linear.json content."""
     import time
     t0 = time.perf_counter()
+    t = finite_time(t)        # (prepare checks it too; this is the t linear.json records)
     scene, p, lin = prepare(scene, overrides, about, t)
     from rodfem._version import __version__
     extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
@@ -131,34 +141,63 @@ def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
 
 
 def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, solver="auto"):
-    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info)."""
-    import json
-    import os
+    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info).
+
+    Only verified modes (rodfem/la/pencil.py) are printed and written; a model without any
+    oscillating mode is refused (ParameterError) and nothing is written.  info["files"] names the
+    files written: modes.csv and modes.json, and, when a flexible body moves, modes.png and
+    mode_shapes.npz."""
     import time
     if count < 1:
         raise ParameterError(f"--count must be an integer >= 1 (got {count})")
     t0 = time.perf_counter()
     scene, p, lin = prepare(scene, overrides, about, t)
     omega, vectors, used = natural_modes(lin, count, solver)
+    found = lin.modes_info
+    if not len(omega):
+        raise ParameterError(f"{scene.name} has no oscillating mode about the {about} state ({_none_why(found)}); "
+                             "nothing written")
     info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
             "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
-            "damping_ratio": [float(z) for z in lin.damping],
-            "parameters": p, "wall_time_s": time.perf_counter() - t0}
+            "damping_ratio": [float(z) for z in lin.damping], "count": count,
+            "residuals": found["residuals"], "fallback": found["fallback"],
+            "eigensolver": {k: v for k, v in found.items() if k not in ("residuals", "fallback", "solver")},
+            "parameters": p, "wall_time_s": time.perf_counter() - t0, "files": []}
     if out:
-        os.makedirs(out, exist_ok=True)
-        with open(os.path.join(out, "modes.csv"), "w") as fh:
-            fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio\n")
-            for k, w in enumerate(omega):
-                fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r},{lin.damping[k]!r}\n")
-        with open(os.path.join(out, "modes.json"), "w") as fh:
-            json.dump(info, fh, indent=2, default=float)
-        if len(omega):
-            bodies, shapes = mode_shapes(lin, vectors)
-            plot_modes(os.path.join(out, "modes.png"), bodies, shapes[: min(len(shapes), 4)], omega)
-            arrays = {"omega": omega, "damping_ratio": lin.damping}
-            for b, (name, s, ref) in enumerate(bodies):
-                key = name or "body"
-                arrays[f"{key}.s"], arrays[f"{key}.reference"] = s, ref
-                arrays[f"{key}.shapes"] = np.array([mode[b] for mode in shapes])
-            np.savez(os.path.join(out, "mode_shapes.npz"), **arrays)
+        info["files"] = write_modes(out, lin, omega, vectors, info)
     return omega, info
+
+
+def _none_why(found):
+    """Why no mode was found, from natural_modes' lin.modes_info."""
+    if "finite_eigenvalues" not in found:
+        return "no verified oscillation"
+    parts = [f"{found['real_eigenvalues']} real"]
+    parts += [f"{found['growing_oscillations']} growing oscillations"] if found["growing_oscillations"] else []
+    parts += [f"{found['rejected']} failing the residual check"] if found["rejected"] else []
+    return f"its linear model has {found['finite_eigenvalues']} finite eigenvalues: {', '.join(parts)}"
+
+
+def write_modes(out, lin, omega, vectors, info):
+    """modes.csv, modes.json and, if a flexible body moves, modes.png and mode_shapes.npz; their names."""
+    import json
+    import os
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, "modes.csv"), "w") as fh:
+        fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio,residual\n")
+        for k, w in enumerate(omega):
+            fh.write(f"{k + 1},{w!r},{w / (2 * np.pi)!r},{2 * np.pi / w!r},{lin.damping[k]!r},{info['residuals'][k]!r}\n")
+    files = ["modes.csv", "modes.json"]
+    bodies, shapes = mode_shapes(lin, vectors)
+    if bodies:
+        plot_modes(os.path.join(out, "modes.png"), bodies, shapes[: min(len(shapes), 4)], omega)
+        arrays = {"omega": omega, "damping_ratio": lin.damping}
+        for b, (name, s, ref) in enumerate(bodies):
+            key = name or "body"
+            arrays[f"{key}.s"], arrays[f"{key}.reference"] = s, ref
+            arrays[f"{key}.shapes"] = np.array([mode[b] for mode in shapes])
+        np.savez(os.path.join(out, "mode_shapes.npz"), **arrays)
+        files += ["modes.png", "mode_shapes.npz"]
+    with open(os.path.join(out, "modes.json"), "w") as fh:
+        json.dump(dict(info, files=files), fh, indent=2, default=float)
+    return files

@@ -123,12 +123,20 @@ def cmd_modes(args):
     out = args.out or os.path.join("results", args.scene + "-modes")
     omega, info = run_modes(args.scene, parse_sets(args.set), out=out, about=args.about, t=args.time,
                             count=args.count, solver=args.solver)
-    say(f"{info['scene']}: {len(omega)} modes about the {args.about} state ({info['solver']} eigensolver, "
-        f"{info['n_states']} states)")
+    rejected = info["eigensolver"].get("rejected", 0)
+    fewer = (f" (of {args.count} asked; {rejected} rejected by the residual check)" if rejected else
+             f" (of {args.count} asked: the model has no more)") if len(omega) < args.count else ""
+    say(f"{info['scene']}: {len(omega)} modes{fewer} about the {args.about} state ({info['solver']} eigensolver, "
+        f"{info['n_states']} states, residuals <= {max(info['residuals']):.1e})")
+    if info["fallback"]:
+        say(f"(the SLEPc result was not verified: {info['fallback']}; solved dense instead)")
+    if info["eigensolver"].get("rejected_below_rad_s"):
+        say(f"(an eigenvalue at {info['eigensolver']['rejected_below_rad_s']:.6g} rad/s, below the last mode, failed "
+            "the residual check and is not listed)")
     say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s} {'damping':>10s}")
     for k, w in enumerate(omega):
         say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g} {info['damping_ratio'][k]:10.3g}")
-    say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz")
+    say(f"results in {out}/: {', '.join(info['files'])}")
 
 
 def parser():
@@ -180,7 +188,8 @@ def add_static_parsers(sub):
         if name == "modes":
             lp.add_argument("--count", type=int, default=6, metavar="K", help="number of modes (default 6)")
             lp.add_argument("--solver", default="auto", choices=("auto", "slepc", "dense"),
-                            help="SLEPc shift-invert, or scipy's dense QZ (auto: dense up to 1500 states)")
+                            help="SLEPc (Krylov-Schur, verified; dense fallback up to 2000 states) or scipy's dense QZ "
+                                 "(auto: dense up to 1500 states)")
         lp.set_defaults(func=func)
 
 

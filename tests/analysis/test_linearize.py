@@ -192,3 +192,116 @@ def test_viscoelastic_modes_follow_the_standard_linear_solid():
     assert np.max(np.abs(R - R.T)) <= 1e-14 * np.max(np.abs(R)) and np.max(np.abs(R)) > 0
     assert np.min(np.linalg.eigvalsh(R)) >= -1e-12 * np.max(np.abs(R))
     assert lin.checks["ph_residual"] <= 1e-12
+
+
+# -- SLEPc on constrained and dissipating pencils (rodfem/la/pencil.py) -------------------------
+
+def both_solvers(lin, k=6):
+    """(s_dense, s_slepc, solver SLEPc's call reports) of the same Linearization: s = -zeta|s| + i omega."""
+    out, used = [], None
+    for solver in ("dense", "slepc"):
+        omega, _, used = natural_modes(lin, k, solver)
+        out.append(-lin.damping * omega / np.sqrt(1 - lin.damping**2) + 1j * omega)
+    return out[0], out[1], used
+
+
+@pytest.mark.parametrize("scene, about, extra", [
+    ("four-bar-2d", "initial", {"n_elements": 6}),                     # 4 joint multipliers, a double zero
+    ("viscoelastic-cantilever-2d", "static", {"n_elements": 10}),     # 30-fold relaxation -45.5 below omega_1 = 54
+    ("viscoelastic-cantilever-2d", "static", {"n_elements": 64}),     # 192-fold
+    ("viscoelastic-cantilever-3d", "static", {"n_elements": 4}),      # orthonormality multipliers, double modes
+])
+def test_slepc_equals_dense_on_constrained_and_dissipating_models(scene, about, extra):
+    """Before: SLEPc found 4 of 6 wrong, undamped-made-damped modes of the four-bar, 0 of the 2D
+    and 2 of the 3D viscoelastic cantilever; now its verified modes are the dense solver's to
+    1e-8 of |s| (frequencies relative, damping ratios absolute), with no fallback."""
+    pytest.importorskip("slepc4py")
+    _, _, lin = prepare(scene, extra, about=about)
+    dense, slepc, used = both_solvers(lin)
+    assert used == "slepc" and len(dense) == len(slepc) == 6, (dense, slepc)
+    assert np.max(np.abs(slepc - dense) / np.abs(dense)) <= 1e-8, (dense, slepc)
+    assert lin.modes_info["fallback"] is None and max(lin.modes_info["residuals"]) <= 1e-10
+
+
+def test_viscoelastic_3d_first_mode_is_the_cantilevers():
+    """The dense filter Im s > 1e-9 max|Im s| dropped every mode below 65 rad/s (max |Im s| ~ 6.5e10:
+    the infinite eigenvalues' roundoff) and gave 116 rad/s, the second bending frequency, as the
+    first.  Euler-Bernoulli: 1.875^2 sqrt(EI / (rhoA L^4)) = 17.7 rad/s, twice (two bending planes),
+    stiffened by the Maxwell branch."""
+    _, p, lin = prepare("viscoelastic-cantilever-3d", {"n_elements": 8})
+    omega, _, _ = natural_modes(lin, 4, "dense")
+    r = p["radius"]
+    exact = BETA_L[0] ** 2 * np.sqrt(p["E"] * np.pi * r**4 / 4 / (p["rho"] * np.pi * r**2 * p["L"] ** 4))
+    assert np.allclose(omega[0], omega[1], rtol=1e-9) and 1.0 < omega[0] / exact < 1.05, (omega, exact)
+    assert 6.0 < omega[2] / omega[0] < 6.6                      # the second bending mode, 6.27 x
+
+
+def test_slider_crank_has_no_mode_and_slepc_says_so():
+    """The rigid slider crank about its initial state: a double zero and 105 infinite eigenvalues, no
+    oscillation.  SLEPc's pairs are roundoff images of the infinite ones (|s| ~ 1e5-1e7): the
+    row-wise residual rejects them all, the dense fallback finds no mode."""
+    pytest.importorskip("slepc4py")
+    from rodfem.la.pencil import NotVerified, Pencil, slepc_modes
+    _, _, lin = prepare("slider-crank-3d", {}, about="initial")
+    with pytest.raises(NotVerified, match="fail the residual check"):
+        slepc_modes(Pencil(lin.Am, lin.Em), 6)
+    omega, _, used = natural_modes(lin, 6, "slepc")
+    assert len(omega) == 0 and used == "dense" and lin.modes_info["fallback"]
+    assert lin.modes_info["finite_eigenvalues"] == 2 == lin.modes_info["real_eigenvalues"]
+
+
+def test_unverified_slepc_result_above_the_fallback_size_is_refused(monkeypatch):
+    pytest.importorskip("slepc4py")
+    import rodfem.analysis.linearize as linearize
+    from rodfem.errors import ParameterError
+    _, _, lin = prepare("slider-crank-3d", {}, about="initial")
+    monkeypatch.setattr(linearize, "DENSE_FALLBACK_MAX", 100)
+    with pytest.raises(ParameterError, match="not verified .* 107 states are more than the dense fallback takes"):
+        natural_modes(lin, 6, "slepc")
+
+
+def one_error_line(p):
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert p.returncode == 2 and len(lines) == 1 and lines[0].startswith("rodfem: error: "), p.stderr
+    return lines[0]
+
+
+@pytest.mark.parametrize("solver", ["auto", "slepc"])
+def test_cli_refuses_a_model_without_modes(tmp_path, rodfem, solver):
+    """Before: exit 0, '0 modes', and 'results in ...: modes.csv, modes.json, modes.png,
+    mode_shapes.npz' of which the last two did not exist (and with --solver slepc a petsc4py
+    traceback: zero pivot)."""
+    out = tmp_path / "sc"
+    line = one_error_line(rodfem("modes", "slider-crank-3d", "--about", "initial", "--solver", solver, "--out", out))
+    assert "no oscillating mode" in line and "2 finite eigenvalues: 2 real" in line
+    assert not out.exists()
+
+
+def test_cli_slepc_modes_of_the_relaxation_cluster(tmp_path, rodfem):
+    """viscoelastic-cantilever-2d at 64 elements: SLEPc reported 0 modes with exit 0 (a 192-fold
+    eigenvalue -45.5 nearer to 0 than omega_1 = 53.9); now the dense solver's modes, every file
+    it names written."""
+    from processes import ok
+    out = tmp_path / "m"
+    p = ok(rodfem("modes", "viscoelastic-cantilever-2d", "--set", "n_elements=64", "--solver", "slepc", "--out", out))
+    info = json.loads((out / "modes.json").read_text())
+    assert info["solver"] == "slepc" and len(info["omega_rad_s"]) == 6 and info["fallback"] is None
+    _, _, lin = prepare("viscoelastic-cantilever-2d", {"n_elements": 64})
+    omega, _, _ = natural_modes(lin, 6, "dense")
+    assert np.allclose(info["omega_rad_s"], omega, rtol=1e-8, atol=0)
+    assert np.allclose(info["damping_ratio"], lin.damping, rtol=0, atol=1e-8)
+    named = p.stdout.strip().splitlines()[-1].split(": ", 1)[1].split(", ")
+    assert named == info["files"] == ["modes.csv", "modes.json", "modes.png", "mode_shapes.npz"]
+    assert all((out / f).stat().st_size > 0 for f in named)
+
+
+@pytest.mark.parametrize("command, time", [
+    ("linearize", "nan"), ("modes", "nan"), ("modes", "inf"), ("static", "nan"), ("static", "-inf")])
+def test_cli_refuses_a_time_that_is_not_finite(tmp_path, rodfem, command, time):
+    """Before: linearize --time nan exited 0 and wrote "t": NaN (not JSON), static exited 0
+    (cantilever) or 3 (roll-up: Newton on a NaN load)."""
+    scene = "roll-up-2d" if command == "static" else "cantilever-2d"
+    out = tmp_path / "out"
+    line = one_error_line(rodfem(command, scene, "--set", "n_elements=2", f"--time={time}", "--out", out))
+    assert line == f"rodfem: error: --time must be a finite number (got {time})"
+    assert not out.exists()
