@@ -68,8 +68,18 @@ def check_elements(n_elements, dofs_per_element, comm):
     return n
 
 
+def shown(x, other):
+    """x with as few digits as show that it is not `other` (at least 3): 10000001 against 1e7,
+    10.000001 against 10, not 1e+07 and 10."""
+    for digits in range(3, 18):
+        text = f"{x:.{digits}g}"
+        if float(text) != other:
+            return text
+    return repr(x)
+
+
 def check_steps(n_steps):
     """Refuse more than MAX_STEPS time steps (the history is kept in memory, ~1 KB per step)."""
     if n_steps > MAX_STEPS:
-        raise ValueError(f"t_end/dt = {n_steps:.3g} steps, more than the limit of {MAX_STEPS:.0e} "
+        raise ValueError(f"t_end/dt = {shown(n_steps, MAX_STEPS)} steps, more than the limit of {MAX_STEPS:.0e} "
                          f"(~{n_steps * 1e3 / 1e9:.3g} GB of history; choose a larger dt or a smaller t_end)")
