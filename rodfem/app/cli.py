@@ -53,6 +53,18 @@ def parse_sets(pairs):
     return overrides
 
 
+def whole(text):
+    """An integer option (--load-steps, --count, --elements) read as the integer parameters are
+    (rodfem/app/scene.py): 10.0 is 10; 10.5, inf and nan are refused."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    if value is None or not value.is_integer():
+        raise argparse.ArgumentTypeError(f"must be an integer (got {text!r})")
+    return int(value)
+
+
 def cmd_list(args):
     for name, ep in scenes().items():
         say(f"{name:24s} {ep.load().description}")
@@ -151,7 +163,7 @@ def parser():
     st.add_argument("--set", action="append", metavar="NAME=VALUE")
     st.add_argument("--out", metavar="DIR")
     st.add_argument("--dt", type=float, nargs="+", help="time steps of the sweep")
-    st.add_argument("--elements", type=int, nargs="+", help="element counts of the sweep")
+    st.add_argument("--elements", type=whole, nargs="+", help="element counts of the sweep")
     st.set_defaults(func=cmd_study)
     add_static_parsers(sub)
     return ap
@@ -164,7 +176,7 @@ def add_static_parsers(sub):
     sp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
     sp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE-static)")
     sp.add_argument("--time", type=float, metavar="T", help="the loads at time T (default t_end: the full load)")
-    sp.add_argument("--load-steps", type=int, default=1, metavar="N", help="first load step 1/N (default 1)")
+    sp.add_argument("--load-steps", type=whole, default=1, metavar="N", help="first load step 1/N (default 1)")
     sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
     sp.set_defaults(func=cmd_static)
     for name, func, what in (("linearize", cmd_linearize, "linear PH model E, J, R, Q, B, C of a scene (.npz, .mat)"),
@@ -178,7 +190,7 @@ def add_static_parsers(sub):
                         help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
         lp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
         if name == "modes":
-            lp.add_argument("--count", type=int, default=6, metavar="K", help="number of modes (default 6)")
+            lp.add_argument("--count", type=whole, default=6, metavar="K", help="number of modes (default 6)")
             lp.add_argument("--solver", default="auto", choices=("auto", "slepc", "dense"),
                             help="SLEPc shift-invert, or scipy's dense QZ (auto: dense up to 1500 states)")
         lp.set_defaults(func=func)

@@ -6,7 +6,7 @@ from contextlib import nullcontext, suppress
 from mpi4py import MPI
 
 from rodfem.analysis.timeloop import Result, run, steps_for
-from rodfem.app.scene import Scene, load
+from rodfem.app.scene import Parameter, Scene, load
 from rodfem.common import interrupts
 from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
 from rodfem.io.output import OutDir, RunWriter, summarize, write_json
@@ -79,14 +79,13 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
     return result, summary
 
 
+CHECKPOINT_EVERY = Parameter("checkpoint_every", 0, "", "steps between checkpoints (0: none)", low=0)
+
+
 def checkpoint_every(value, out):
-    """The checkpoint interval N (0: none) from --set checkpoint_every=N."""
-    try:
-        every = int(value)
-        if every != float(value) or every < 0:
-            raise ValueError
-    except (TypeError, ValueError):
-        raise ParameterError(f"parameter 'checkpoint_every' must be an integer >= 0 (got {value!r})") from None
+    """The checkpoint interval N (0: none) from --set checkpoint_every=N (an integer parameter like
+    n_elements: 10.0 is 10, 10.5 is refused)."""
+    every = CHECKPOINT_EVERY.value(value)
     if every and not out:
         raise ParameterError("parameter 'checkpoint_every' needs an output directory (--out)")
     return every
