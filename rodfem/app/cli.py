@@ -65,6 +65,15 @@ def whole(text):
     return int(value)
 
 
+def check_directories(args):
+    """Refuse an empty --out or --resume ('' would otherwise read as none given: the default
+    directory, results/SCENE, cleared)."""
+    for option in ("out", "resume"):
+        value = getattr(args, option, None)
+        if value is not None and not value.strip():
+            raise ParameterError(f"--{option} must name a directory (got {value!r})")
+
+
 def cmd_list(args):
     for name, ep in scenes().items():
         say(f"{name:24s} {ep.load().description}")
@@ -204,6 +213,7 @@ def main(argv=None):
     logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
         with interrupts.deferred():
+            check_directories(args)
             args.func(args)
     except InputError as e:
         return fail(f"rodfem: error: {e}", e.exit_code)

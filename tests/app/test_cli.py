@@ -99,6 +99,20 @@ def test_integer_parameters_take_a_whole_float(tmp_path):
     assert s["parameters"]["n_elements"] == 4 and s["n_elements"] == 4
 
 
+@pytest.mark.parametrize("command", ["run", "static", "linearize", "modes", "study", "resume"])
+def test_an_empty_out_is_refused(command, capsys, tmp_path, monkeypatch):
+    """--out '' (or --resume '') is refused, not taken for the default results/SCENE (which it cleared)."""
+    monkeypatch.chdir(tmp_path)
+    default = tmp_path / "results" / "roll-up-2d"
+    default.mkdir(parents=True)
+    (default / "summary.json").write_text("mine")
+    args = {"resume": ["run", "--resume", "", "--quiet"]}.get(command, [command, "roll-up-2d", "--out", ""])
+    assert main(args) == 2
+    option = "--resume" if command == "resume" else "--out"
+    assert capsys.readouterr().err.strip().splitlines() == [f"rodfem: error: {option} must name a directory (got '')"]
+    assert (default / "summary.json").read_text() == "mine" and len(list((tmp_path / "results").iterdir())) == 1
+
+
 @pytest.mark.parametrize("setting, message", [
     ("EA=-1", "rodfem: error: parameter 'EA' must be a number > 0 (got -1)"),
     ("EA", "rodfem: error: --set expects NAME=VALUE (got 'EA')"),
