@@ -135,7 +135,7 @@ def cmd_linearize(args):
         f"{info['n_states']} states, {info['n_inputs']} inputs; |A - (J - R) Q| = {c['ph_residual']:.1e} |A|, "
         f"|f0| = {info['drift_norm']:.1e}")
     say(f"results in {out}/: E.npz J.npz R.npz Q.npz B.npz C.npz A.npz Hess.npz (scipy.sparse.load_npz), "
-        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json")
+        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json, summary.json")
 
 
 def cmd_modes(args):
@@ -149,7 +149,7 @@ def cmd_modes(args):
     say(f"{'mode':>4s} {'omega [rad/s]':>16s} {'f [Hz]':>14s} {'damping':>10s}")
     for k, w in enumerate(omega):
         say(f"{k + 1:4d} {w:16.8g} {w / (2 * 3.141592653589793):14.8g} {info['damping_ratio'][k]:10.3g}")
-    say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz")
+    say(f"results in {out}/: modes.csv, modes.json, modes.png, mode_shapes.npz, summary.json")
 
 
 def parser():
@@ -232,7 +232,7 @@ def main(argv=None):
 
 def kept(args):
     out = getattr(args, "out", None)
-    return f"; results so far kept in {out}/" if out and args.command == "run" else ""
+    return f"; results so far kept in {out}/" if out and args.command in ("run", "static") else ""
 
 
 def fail(message, code):

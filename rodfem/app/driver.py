@@ -121,7 +121,8 @@ def stopped(stop):
         return "newton-failure", {"step": stop.step, "t": stop.t, "residual": stop.residual,
                                   "iterations": stop.iterations, "reason": stop.reason}
     if isinstance(stop, Interrupted):
-        return "interrupted", {"signal": stop.signal, "step": stop.step, "t": stop.t}
+        return "interrupted", {"signal": stop.signal, "step": stop.step, "t": stop.t,
+                               **({"where": stop.where} if stop.where else {})}
     return "error", {"message": str(stop)}
 
 

@@ -1,4 +1,4 @@
-"""What a run may ask for: a bounded number of steps, a mesh that fits in memory and
+"""What a run may ask for: a bounded number of (time or load) steps, a mesh that fits in memory and
 at least one element per MPI rank.  Refused with one line giving the estimate.
 
 Memory per element, measured (peak RSS of a run, LU factorisation included):
@@ -11,7 +11,7 @@ import resource
 
 from mpi4py import MPI
 
-from rodfem.errors import InputError
+from rodfem.errors import InputError, ParameterError
 
 MAX_STEPS = 10**7
 BYTES_PER_DOF = 600.0           # a
@@ -83,3 +83,10 @@ def check_steps(n_steps):
     if n_steps > MAX_STEPS:
         raise ValueError(f"t_end/dt = {shown(n_steps, MAX_STEPS)} steps, more than the limit of {MAX_STEPS:.0e} "
                          f"(~{n_steps * 1e3 / 1e9:.3g} GB of history; choose a larger dt or a smaller t_end)")
+
+
+def check_load_steps(steps):
+    """Refuse a first load step below 1/MAX_STEPS (--load-steps N: at most MAX_STEPS load steps)."""
+    if steps > MAX_STEPS:
+        raise ParameterError(f"--load-steps {shown(steps, MAX_STEPS)}: more than the limit of {MAX_STEPS:.0e} "
+                             f"load steps (the first load step is 1/N; choose N in [1, {MAX_STEPS:.0e}])")

@@ -28,9 +28,9 @@ def one_line(stderr, start="rodfem: error:"):
     return lines[0]
 
 
-def rows(out):
-    """The rows of history.csv."""
-    with open(os.path.join(out, "history.csv")) as f:
+def rows(out, name="history.csv"):
+    """The rows of history.csv (or another CSV file of the run)."""
+    with open(os.path.join(out, name)) as f:
         return list(csv.DictReader(f))
 
 
@@ -57,6 +57,8 @@ def leftovers(out):
     pytest.param(["run", *RU, "--set", "n_elements=2.5"], ["'n_elements'", "integer"], id="elements-not-integer"),
     pytest.param(["run", *RU, "--set", "t_end=1e308", "--set", "dt=1e-308"], ["'dt'", "limit"], id="float-overflow"),
     pytest.param(["study", "roll-up-2d", "--dt", "0", "--elements", "4"], ["--dt 0", "> 0"], id="study-dt-zero"),
+    pytest.param(["static", "roll-up-2d", "--load-steps", "1000000000"],
+                 ["--load-steps 1e+09: more than the limit of 1e+07 load steps"], id="static-too-many-load-steps"),
 ])
 def test_bad_input_is_refused_in_one_line(args, words, capsys, tmp_path):
     out = tmp_path / "out"
@@ -199,16 +201,28 @@ def test_a_second_run_continues_in_time():
 
 # -- interrupts and the standard streams -------------------------------------------------
 
-def wait_for_rows(out, count=20, timeout=60):
+def wait_for_rows(out, count=20, timeout=60, name="history.csv"):
     t0 = time.time()
     while time.time() - t0 < timeout:
         try:
-            if len(rows(out)) >= count:
+            if len(rows(out, name)) >= count:
                 return
         except (OSError, ValueError):
             pass
         time.sleep(0.05)
-    raise AssertionError("the run wrote no rows")
+    raise AssertionError(f"the run wrote no rows into {name}")
+
+
+def wait_for_status(out, status="running", timeout=60):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        try:
+            if summary(out)["status"] == status:
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.05)
+    raise AssertionError(f"no summary.json with status {status!r} in {out}")
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
@@ -226,6 +240,41 @@ def test_a_signal_stops_between_steps_and_keeps_the_results(sig, code, tmp_path)
     assert s["status"] == "interrupted" and s["failure"]["signal"] == sig.name
     assert len(rows(out)) == s["steps"] + 1 and f"after step {s['steps']} " in line
     assert os.path.getsize(os.path.join(out, "shapes.png")) > 1000 and not leftovers(out)
+
+
+STATIC = ["static", "roll-up-2d", "--set", "n_elements=4", "--load-steps", "100000", "--fixed-steps"]
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_static_stops_between_load_steps(sig, code, tmp_path):
+    """`rodfem static` stops between two load steps like `run` between time steps (it ran on to the
+    end, exit 0, and a second signal did not stop it either)."""
+    out = str(tmp_path)
+    p = subprocess.Popen(command(*STATIC, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=environment(), cwd=REPO)
+    wait_for_rows(out, name="loadsteps.csv")
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == code, err[-3000:]
+    line = one_line(err, f"rodfem: interrupted by {sig.name} after load step ")
+    assert f"results so far kept in {out}/" in line
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["failure"]["signal"] == sig.name and s["mode"] == "static"
+    assert 20 <= len(rows(out, "loadsteps.csv")) < 100000 and not leftovers(out)
+
+
+def test_modes_stop_before_the_eigenvalue_solve(tmp_path):
+    """`rodfem modes` stops on a signal before its eigenvalue solve; its summary.json says so."""
+    out = str(tmp_path)
+    p = subprocess.Popen(command("modes", "cantilever-2d", "--set", "n_elements=100", "--out", out),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment(), cwd=REPO)
+    wait_for_status(out)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err[-3000:]
+    one_line(err, "rodfem: interrupted by SIGINT")
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["mode"] == "modes" and not os.path.exists(os.path.join(out, "modes.csv"))
 
 
 def test_a_full_or_closed_stdout(tmp_path):
