@@ -22,6 +22,11 @@ scene with the stored parameters, loads the checkpoint and continues: the
 rows of history.csv after the checkpoint (and a partly written last row) are
 dropped, the following rows appended, so history.csv equals that of the
 uninterrupted run.  Only ``t_end`` (to run further) may be changed.
+Everything is checked before DIR is touched (a refused resume leaves its
+summary.json and history.csv as they were): the checkpoint must fit the
+scene's mesh, and be of the run in DIR (the scene and parameters of its
+summary.json, the t and H of its history row at the checkpoint's step), not
+one copied in from another run.
 
 Newton itself keeps state across steps when it reuses its Jacobian (the
 chord Newton of the 3D rod scenes, ``snes_lag_jacobian`` persisting): a run
@@ -337,10 +342,12 @@ def resume_parameters(meta, directory, overrides):
 
 def history_lines(directory, meta, comm):
     """The lines (header and steps 0..step) of DIR/history.csv a resumed run keeps, on rank 0 ([] elsewhere),
-    (collective; nothing is written)."""
+    after checking that the checkpoint is of the run in DIR (collective; nothing is written):
+    its summary.json's scene and parameters, and its history row at the checkpoint's step."""
     lines, error = [], None
     if comm.rank == 0:
         try:
+            _same_run(directory, meta)
             lines = _kept_lines(directory, meta)
         except ParameterError as e:
             error = str(e)
@@ -348,6 +355,24 @@ def history_lines(directory, meta, comm):
     if error:
         raise ParameterError(error)
     return lines
+
+
+def _same_run(directory, meta):
+    """Refuse a checkpoint whose scene or parameters are not those of DIR/summary.json (a copy of another run's)."""
+    try:
+        with open(os.path.join(directory, "summary.json")) as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return   # no summary (deleted, or killed while writing it): history.csv decides
+    copied = "(copied from another run?): resume in the directory it was written in"
+    if summary.get("scene") != meta.get("scene"):
+        raise ParameterError(f"the checkpoint in {directory} is of scene {meta.get('scene')}, but {directory}/"
+                             f"summary.json is of scene {summary.get('scene')} {copied}")
+    mine, theirs = meta.get("parameters", {}), summary.get("parameters", {})
+    for name in sorted(set(mine) | set(theirs)):
+        if name not in CHANGEABLE and mine.get(name) != theirs.get(name):
+            raise ParameterError(f"the checkpoint in {directory} has {name} = {mine.get(name)!r}, but {directory}/"
+                                 f"summary.json has {name} = {theirs.get(name)!r} {copied}")
 
 
 def _kept_lines(directory, meta):
@@ -359,7 +384,20 @@ def _kept_lines(directory, meta):
         lines = f.read().splitlines(keepends=True)[: step + 2]
     if len(lines) < step + 2 or not lines[-1].endswith("\n"):
         raise ParameterError(f"{path} has fewer rows than the checkpoint's step {step}: cannot continue it")
+    row = next(csv.DictReader(io.StringIO(lines[0] + lines[-1])))
+    try:
+        t, H = float(row["t"]), float(row["H"])
+    except (KeyError, TypeError, ValueError):
+        t = H = float("nan")
+    if not (_close(t, meta["t"]) and _close(H, meta["H"])):
+        raise ParameterError(f"the checkpoint in {directory} (step {step}, t = {meta['t']:.6g}, H = {meta['H']:.6g}) "
+                             f"is not of the run in {path} (its step {step}: t = {t:.6g}, H = {H:.6g}) "
+                             "(copied from another run?): resume in the directory it was written in")
     return lines
+
+
+def _close(a, b):
+    return abs(a - b) <= 1e-12 * max(abs(a), abs(b), 1e-300)
 
 
 def truncate_history(outdir, lines):

@@ -155,6 +155,31 @@ def test_a_refused_resume_keeps_the_record(case, capsys, tmp_path):
     assert record(run) == kept
 
 
+@pytest.mark.parametrize("other", ["another-scene", "another-run-of-the-scene"])
+def test_a_checkpoint_copied_from_another_run_is_refused(other, capsys, tmp_path):
+    """A checkpoint copied in from another run (another scene, or the same scene with other parameters)
+    is refused in one line instead of resuming it on top of this directory's history."""
+    run, source = tmp_path / "run", tmp_path / "source"
+    kept = finished(run)
+    if other == "another-scene":
+        assert main(["run", "roll-up-2d", "--set", "n_elements=4", "--set", "t_end=0.5", "--set", "dt=0.1",
+                     "--set", "checkpoint_every=2", "--quiet", "--out", str(source)]) == 0
+    else:
+        finished(source, "--set", "EA=5000")
+    shutil.copy(source / "checkpoint.npz", run / "checkpoint.npz")
+    capsys.readouterr()
+    assert main(["run", "--resume", str(run), "--set", "t_end=1"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "copied from another run?" in lines[0], lines
+    assert ("scene roll-up-2d" if other == "another-scene" else "EA = 5000.0") in lines[0]
+    assert record(run) == kept
+    # without summary.json, history.csv tells: its row at the checkpoint's step is not the checkpoint's state
+    os.unlink(run / "summary.json")
+    assert main(["run", "--resume", str(run), "--set", "t_end=1"]) == 2
+    assert "is not of the run in" in capsys.readouterr().err
+    assert (run / "history.csv").read_text() == kept[1]
+
+
 @pytest.mark.mpi
 def test_mpi_a_refused_resume_keeps_the_record(rodfem, tmp_path):
     run = tmp_path / "run"
