@@ -112,7 +112,9 @@ def build(scene, p, comm, outdir=None, started=None):
     try:
         return scene.build(p, comm)
     except Exception as error:
-        if interrupts.received():  # whatever the compiler's death looked like
+        if isinstance(error, Interrupted):
+            stop = error
+        elif interrupts.received():  # whatever the compiler's death looked like
             stop = Interrupted(interrupts.received())
         elif isinstance(error, STOPS):
             stop = error

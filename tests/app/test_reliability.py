@@ -327,6 +327,50 @@ def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):
     assert p.returncode == 2 and "set XDG_CACHE_HOME to a writable directory" in one_line(p.stderr)
 
 
+def holding_the_lock(cache):
+    """Hold CACHE/fenics/rodfem-jit.lock as a compiling run would (its pid written in); the open file."""
+    os.makedirs(cache / "fenics", exist_ok=True)
+    lock = open(cache / "fenics" / "rodfem-jit.lock", "w")
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
+    return lock
+
+
+def test_a_held_jit_cache_lock(tmp_path):
+    """Another process holds the cache lock (a run compiling, stopped or stuck): a run with nothing to
+    compile does not wait; one that must compile says who holds it, stops on a signal, and gives up
+    after RODFEM_JIT_LOCK_TIMEOUT seconds in one line (it waited for ever, silently, deaf to signals)."""
+    warm, cold, out = tmp_path / "warm", tmp_path / "cold", str(tmp_path / "out")
+    assert rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": str(warm)}).returncode == 0
+    with holding_the_lock(warm), holding_the_lock(cold):
+        p = rodfem("run", *RU, "--out", out, timeout=60, env={"XDG_CACHE_HOME": str(warm)})
+        assert p.returncode == 0 and "waiting" not in p.stderr, p.stderr[-3000:]   # all compiled: no lock needed
+        lock = cold / "fenics" / "rodfem-jit.lock"
+        p = rodfem("run", *RU, "--out", out, timeout=60,
+                   env={"XDG_CACHE_HOME": str(cold), "RODFEM_JIT_LOCK_TIMEOUT": "1"})
+        assert p.returncode == 2, p.stderr[-3000:]
+        waiting, error = p.stderr.strip().splitlines()
+        assert waiting.startswith(f"rodfem: waiting for the JIT cache lock {lock}, held by pid {os.getpid()}")
+        assert error.startswith(f"rodfem: error: the JIT cache lock {lock} is still held by pid {os.getpid()} "
+                                "after 1 s") and "RODFEM_JIT_LOCK_TIMEOUT" in error
+        assert summary(out)["status"] == "error"
+        p = rodfem("run", *RU, "--out", out, timeout=60, env={"XDG_CACHE_HOME": str(cold),
+                                                             "RODFEM_JIT_LOCK_TIMEOUT": "soon"})
+        assert one_line(p.stderr) == "rodfem: error: RODFEM_JIT_LOCK_TIMEOUT must be a number of seconds >= 0 " \
+                                     "(got 'soon')"
+        p = subprocess.Popen(command("run", *RU, "--out", out), stderr=subprocess.PIPE, text=True, cwd=REPO,
+                             env=environment(XDG_CACHE_HOME=str(cold)))
+        assert p.stderr.readline().startswith("rodfem: waiting for the JIT cache lock")
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 143
+        one_line(err, "rodfem: interrupted by SIGTERM while waiting for the JIT cache lock")
+        assert summary(out)["status"] == "interrupted"
+        assert not [f for f in os.listdir(cold / "fenics") if f.startswith("libffcx")]   # it compiled nothing
+    assert rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": str(cold)}).returncode == 0
+
+
 # -- under mpirun -n 2: the ranks agree, none is left waiting ----------------------
 
 @pytest.mark.mpi
@@ -358,6 +402,17 @@ def children(pid):
         if int(fields[1]) == pid:
             found.append(int(stat.split("/")[2]))
     return found
+
+
+@pytest.mark.mpi
+def test_mpi_a_held_jit_cache_lock(tmp_path):
+    """Rank 0 gives up waiting for the cache lock; both ranks end with its one line."""
+    cache = tmp_path / "cache"
+    with holding_the_lock(cache):
+        p = rodfem("run", *RU, "--out", tmp_path / "o", np=2, timeout=120,
+                   env={"XDG_CACHE_HOME": str(cache), "RODFEM_JIT_LOCK_TIMEOUT": "1"})
+    assert p.returncode == 2, p.stderr[-3000:]   # 124: timeout, a rank was left waiting
+    assert p.stderr.strip().splitlines()[-1].startswith("rodfem: error: the JIT cache lock")
 
 
 @pytest.mark.mpi
