@@ -107,6 +107,7 @@ def cmd_run(args):
 
 def cmd_study(args):
     from rodfem.app.study import run_study
+    args.out = args.out or os.path.join("results", f"study-{args.scene}")
     run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
 
 
@@ -216,11 +217,11 @@ def main(argv=None):
             check_directories(args)
             args.func(args)
     except InputError as e:
-        return fail(f"rodfem: error: {e}", e.exit_code)
+        return fail(f"rodfem: error: {e}{kept(args, e)}", e.exit_code)
     except NewtonFailure as e:
-        return fail(f"rodfem: error: {e}{kept(args)}", 3)
+        return fail(f"rodfem: error: {e}{kept(args, e)}", 3)
     except Interrupted as e:
-        return fail(f"rodfem: {e}{kept(args)}", e.exit_code)
+        return fail(f"rodfem: {e}{kept(args, e)}", e.exit_code)
     except Exception:
         if comm.size > 1:  # a bug: abort every rank rather than leave the others waiting
             traceback.print_exc()
@@ -230,9 +231,13 @@ def main(argv=None):
     return 0
 
 
-def kept(args):
-    out = getattr(args, "out", None)
-    return f"; results so far kept in {out}/" if out and args.command in ("run", "static") else ""
+def kept(args, error):
+    """'; results so far kept in DIR/' for a run or static solve that stopped (not for bad input), and
+    for an error that says where its results are kept (`error.kept`: a study)."""
+    out = getattr(error, "kept", None)
+    if out is None and not isinstance(error, InputError) and args.command in ("run", "static"):
+        out = getattr(args, "out", None)
+    return f"; results so far kept in {out}/" if out else ""
 
 
 def fail(message, code):

@@ -8,6 +8,7 @@ banded matrix of bandwidth ~ d).
 """
 import numbers
 import resource
+from contextlib import contextmanager
 
 from mpi4py import MPI
 
@@ -65,7 +66,28 @@ def check_elements(n_elements, dofs_per_element, comm):
         raise InputError(f"n_elements = {n} needs about {n * per_element / 1e9:.3g} GB ({dofs_per_element} dofs, "
                          f"{per_element / 1e3:.3g} KB per element) but {have / 1e9:.3g} GB are available: "
                          f"at most about {int(have / per_element)} elements fit")
+    if _checking["on"]:
+        raise Checked(n)
     return n
+
+
+class Checked(Exception):
+    """Raised by check_elements inside `checking()` once a mesh has passed: the build stops there."""
+
+
+_checking = {"on": False}
+
+
+@contextmanager
+def checking():
+    """Inside the block a scene's build stops at its first mesh, once check_elements has passed it
+    (`Checked`): its parameters checked without the cost of building (rodfem study checks every run of
+    a sweep this way before running any)."""
+    _checking["on"] = True
+    try:
+        yield
+    finally:
+        _checking["on"] = False
 
 
 def shown(x, other):
