@@ -44,13 +44,16 @@ class NewtonFailure(RuntimeError):
 
 
 class Interrupted(Exception):
-    """The run was stopped by a signal between two time steps (exit code 128 + signal number)."""
+    """The run was stopped by a signal between two time steps (exit code 128 + signal number).
 
-    def __init__(self, signum, step=0, t=0.0):
-        self.signum, self.step, self.t = int(signum), step, t
+    `where` replaces "after step n (t = ...)" in the message: "after load step 3 (load factor 0.3)",
+    "before the eigenvalue solve", "while waiting for the JIT cache lock"."""
+
+    def __init__(self, signum, step=0, t=0.0, where=None):
+        self.signum, self.step, self.t, self.where = int(signum), step, t, where
         self.signal = signal.Signals(self.signum).name
         self.exit_code = 128 + self.signum
-        super().__init__(f"interrupted by {self.signal} after step {step} (t = {t:.6g})")
+        super().__init__(f"interrupted by {self.signal} {where or f'after step {step} (t = {t:.6g})'}")
 
 
 @contextmanager

@@ -35,12 +35,14 @@ scenes has one: end moments and dead loads on rods and cables are
 monotone).  A failure ends with a one-line `StaticFailure` (exit code 3).
 """
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
 import ufl
 from dolfinx import fem
 
+from rodfem.common import interrupts
+from rodfem.common.limits import check_load_steps
 from rodfem.core.integrators import Step, flatten, unflatten
 from rodfem.core.system import JointRows
 from rodfem.errors import NewtonFailure, ParameterError
@@ -182,10 +184,15 @@ class Statics:
         self.unknown.getArray()[:] = values
 
     # -- Newton with load continuation ------------------------------------------------
-    def solve(self, t: float = 0.0, steps: int = 1, adaptive: bool = True, min_step: float = 1e-5) -> "StaticResult":
+    def solve(self, t: float = 0.0, steps: int = 1, adaptive: bool = True, min_step: float = 1e-5,
+              on_step: Optional[Callable] = None) -> "StaticResult":
         """Equilibrium under the inputs at time t: mu = 0 -> 1 in load steps starting at 1/steps
-        (fixed if not `adaptive`).  The solution is left as x_n (and x_{n+1}) of the problem,
-        at rest.  Returns a StaticResult; raises StaticFailure."""
+        (fixed if not `adaptive`; at most MAX_STEPS of them).  The solution is left as x_n (and
+        x_{n+1}) of the problem, at rest.  `on_step(LoadStep)` is called after every accepted
+        load step.  Inside `rodfem.common.interrupts.deferred` a signal stops the continuation
+        between two load steps (`rodfem.errors.Interrupted`).  Returns a StaticResult; raises
+        StaticFailure."""
+        check_load_steps(steps)
         res = StaticResult(t=t)
         self.target.predict(None)          # x_n from the bodies
         self._set(self.target.X0.getArray(readonly=True))
@@ -194,6 +201,7 @@ class Statics:
         last = (0, float("nan"), "")
         k = 0
         while mu < 1.0 - 1e-12:
+            interrupts.check(self.target.comm, k, t, f"after load step {k} (load factor {mu:.6g})")
             d = min(dmu, 1.0 - mu)
             if 1.0 - mu - d < 1e-12:
                 d = 1.0 - mu
@@ -224,6 +232,8 @@ class Statics:
             x_prev, mu_prev, x_cur = x_cur, mu, self._get()
             mu += d
             res.steps.append(LoadStep(mu, solved.iterations, solved.residual))
+            if on_step:
+                on_step(res.steps[-1])
             dmu = min(2.0 * d, 1.0) if adaptive and solved.iterations <= 4 else d
         self._set(x_cur)
         self.set_load(1.0, t)

@@ -19,7 +19,7 @@ from typing import Callable, Optional
 import numpy as np
 
 from rodfem.common import interrupts
-from rodfem.common.limits import check_steps
+from rodfem.common.limits import check_steps, shown
 from rodfem.core.model import SteppedSystem
 from rodfem.errors import NewtonFailure
 
@@ -49,7 +49,7 @@ def steps_for(dt: float, t_end: float) -> int:
     check_steps(ratio)  # also an overflow to inf
     n = int(round(ratio))
     if n < 1 or abs(n * dt - t_end) > 1e-9 * t_end:
-        raise ValueError(f"dt must divide t_end into a whole number of steps (t_end/dt = {ratio:.6g})")
+        raise ValueError(f"dt must divide t_end into a whole number of steps (t_end/dt = {shown(ratio, n)})")
     return n
 
 

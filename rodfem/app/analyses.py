@@ -1,13 +1,69 @@
 """The analyses of a scene from the command line: `rodfem static`, `rodfem linearize` and
 `rodfem modes` build the scene, run the algorithm of rodfem/analysis/ on it and own the output
 directory, its files, pictures and summary (as rodfem/app/driver.py does for `rodfem run`).
+
+Each writes summary.json at the start (status "running") and replaces it at the end: "completed",
+or how it stopped: "static-failure", "interrupted" (SIGINT/SIGTERM: between two load steps, or
+before the eigenvalue solve), "error".  Input is checked before the directory is touched.
 """
+import os
+import time
+from contextlib import contextmanager, nullcontext, suppress
+
 import numpy as np
 from mpi4py import MPI
 
 from rodfem.analysis.linearize import Linearization, mode_shapes, natural_modes, plot_modes
 from rodfem.analysis.statics import StaticFailure, Statics
-from rodfem.errors import ParameterError
+from rodfem.app.driver import STOPS, build, stopped
+from rodfem.common import interrupts
+from rodfem.common.limits import check_load_steps
+from rodfem.errors import InputError, Interrupted, ParameterError
+from rodfem.io.output import OutDir, write_json
+
+
+def resolve(scene, overrides):
+    """(Scene, its parameter values) of a scene or its name and the --set overrides."""
+    from rodfem.app.scene import Scene, load
+    if not isinstance(scene, Scene):
+        scene = load(scene)
+    return scene, scene.values(overrides)
+
+
+@contextmanager
+def owned(out, started, comm, subdir=None):
+    """The block's OutDir (None without `out`; with `subdir` made in it): locked, its summary.json
+    `started` (status "running").
+
+    An exception of a stopped analysis is recorded in summary.json and re-raised; any exception
+    after a signal (a compiler killed by a Ctrl-C) is the interrupt.
+    """
+    outdir = OutDir(out, comm, subdir) if out else None
+    with outdir.claimed(started) if outdir else nullcontext():
+        try:
+            yield outdir
+        except Exception as error:
+            stop = error
+            if interrupts.received() and not isinstance(error, STOPS):
+                stop = Interrupted(interrupts.received(), where="while building the scene")
+            elif not isinstance(error, STOPS):
+                raise
+            if outdir:
+                status, failure = (("static-failure", str(stop)) if isinstance(stop, StaticFailure)
+                                   else stopped(stop))
+                with suppress(InputError):
+                    outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                              dict(started, status=status, failure=failure))
+            if stop is error:
+                raise
+            raise stop from None
+
+
+def heading(scene, p, mode, comm, **extra):
+    """summary.json at the start of an analysis."""
+    return {"scene": scene.name, "mode": mode, "status": "running", "parameters": p, **extra,
+            "mpi_ranks": comm.size, "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+
 
 # -- a scene's equilibrium, from the command line (rodfem static SCENE) -----------------------
 
@@ -24,45 +80,31 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
 
     Writes into `out` (if given): summary.json (load steps, Newton iterations, the observables
     at equilibrium and, for scenes with an exact solution, the error against it), loadsteps.csv
-    (mu, Newton iterations, residual per load step), centreline.pvd (the initial and the
-    equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as the state at step 0,
-    from which ``rodfem run --resume out`` starts a dynamic run (at rest, pre-stressed).
+    (mu, Newton iterations, residual per load step, a row as each is accepted), centreline.pvd
+    (the initial and the equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as
+    the state at step 0, from which ``rodfem run --resume out`` starts a dynamic run (at rest,
+    pre-stressed).  A signal stops it between two load steps (summary.json: "interrupted").
     Returns (problem, StaticResult, summary)."""
-    import os
-    import time
-    from contextlib import nullcontext
-
-    from mpi4py import MPI
-
     from rodfem._version import __version__
-    from rodfem.app.scene import Scene, load
     from rodfem.io import checkpoint
-    from rodfem.io.output import OutDir, RunWriter, plot_shapes, write_json
+    from rodfem.io.output import RunWriter, plot_shapes
 
     comm = comm or MPI.COMM_WORLD
-    if not isinstance(scene, Scene):
-        scene = load(scene)
-    p = scene.values(overrides)
+    scene, p = resolve(scene, overrides)
     t = p["t_end"] if t is None else finite_time(t)
     if steps < 1:
         raise ParameterError(f"--load-steps must be an integer >= 1 (got {steps})")
-    outdir = OutDir(out, comm) if out else None
-    started = {"scene": scene.name, "mode": "static", "status": "running", "parameters": p, "t": t,
-               "mpi_ranks": comm.size, "pid": os.getpid()}
-    with outdir.claimed(started) if outdir else nullcontext():
-        problem = scene.build(p, comm)
+    check_load_steps(steps)
+    started = heading(scene, p, "static", comm, t=t)
+    with owned(out, started, comm, subdir="centreline") as outdir:
+        problem = build(scene, p, comm)
         writer = RunWriter(outdir, problem, 1, 2, p.get("section", 0.0)) if outdir else None
         if writer:
             writer.frame(0.0)
         t0 = time.perf_counter()
         statics = Statics(problem)
-        try:
-            result = statics.solve(t, steps, adaptive)
-        except StaticFailure as fail:
-            if outdir:
-                outdir.do("write summary.json", write_json, outdir.file("summary.json"),
-                          dict(started, status="static-failure", failure=str(fail)))
-            raise
+        rows = LoadStepsFile(outdir)
+        result = statics.solve(t, steps, adaptive, on_step=rows.append)
         wall = time.perf_counter() - t0
         obs = problem.observe()
         summary = {"scene": scene.name, "mode": "static", "status": "completed", "rodfem_version": __version__,
@@ -81,17 +123,37 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
             checkpoint.save(outdir, problem, checkpoint.Layout(problem), 0, None, problem.hamiltonian(), 0.0,
                             {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
             writer.frame(1.0)
-
-            def write_loadsteps(path):
-                with open(path, "w") as f:
-                    f.write("mu,newton_its,residual\n")
-                    for s in result.steps:
-                        f.write(f"{s.mu!r},{s.iterations},{s.residual!r}\n")
-            outdir.do("write loadsteps.csv", write_loadsteps, outdir.file("loadsteps.csv"))
+            rows.close()
             outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
             outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots,
                       writer.dim, writer.width)
     return problem, result, summary
+
+
+class LoadStepsFile:
+    """loadsteps.csv of a static solve (mu, newton_its, residual): a row written as each load step
+    is accepted, so a solve that stops keeps its rows; nothing without an OutDir.  Collective."""
+
+    def __init__(self, outdir):
+        self.outdir, self._file = outdir, None
+
+    def append(self, step):
+        if self.outdir:
+            self.outdir.do("write loadsteps.csv", self._write, f"{step.mu!r},{step.iterations},{step.residual!r}\n")
+
+    def close(self):
+        if self.outdir:
+            self.outdir.do("write loadsteps.csv", self._write, None)
+
+    def _write(self, line):
+        if self._file is None:
+            self._file = open(self.outdir.file("loadsteps.csv"), "w")
+            self._file.write("mu,newton_its,residual\n")
+        if line is None:
+            self._file.close()
+            return
+        self._file.write(line)
+        self._file.flush()
 
 
 # -- a scene's linear model and modes (rodfem linearize / rodfem modes) -------------------------
@@ -103,18 +165,24 @@ def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=
     """Build `scene` and put it in the state to linearize about: its static equilibrium under the
     inputs at time t ('static', the default) or its initial state with the inputs at t
     ('initial'; not an equilibrium in general: then f0 != 0).  Returns (scene, p, Linearization)."""
-    from rodfem.analysis.statics import Statics
-    from rodfem.app.scene import Scene, load
     comm = comm or MPI.COMM_WORLD
+    t = finite_time(t)
+    check_linearizable(about, comm)
+    scene, p = resolve(scene, overrides)
+    return scene, p, linearization(scene, p, about, t, comm, load_steps)
+
+
+def check_linearizable(about, comm):
     if about not in ABOUT:
         raise ParameterError(f"--about must be one of {', '.join(ABOUT)} (got {about!r})")
-    t = finite_time(t)
     if comm.size > 1:
         raise ParameterError("linearize and modes run on one process (no mpirun)")
-    if not isinstance(scene, Scene):
-        scene = load(scene)
-    p = scene.values(overrides)
-    problem = scene.build(p, comm)
+
+
+def linearization(scene, p, about, t, comm, load_steps=1):
+    """The Linearization of the scene with values p about its static or initial state (see `prepare`);
+    a signal stops it between two load steps or once the matrices are assembled."""
+    problem = build(scene, p, comm)
     system = problem.named_bodies
     ref = None
     if about == "static":
@@ -124,47 +192,70 @@ def prepare(scene, overrides=None, about="static", t=0.0, comm=None, load_steps=
     else:
         for load in problem.loads:
             load.update(t)
-    return scene, p, Linearization(problem, reference=ref)
+    lin = Linearization(problem, reference=ref)
+    interrupts.check(comm, 0, t, "after the linearization")
+    return lin
 
 
 def run_linearize(scene, overrides=None, out=None, about="static", t=0.0):
-    """`rodfem linearize`: the matrices into `out`; returns the linear.json content."""
-    import time
-    t0 = time.perf_counter()
-    t = finite_time(t)        # (prepare checks it too; this is the t linear.json records)
-    scene, p, lin = prepare(scene, overrides, about, t)
+    """`rodfem linearize`: the matrices into `out` (and summary.json); returns the linear.json content."""
     from rodfem._version import __version__
-    extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
-             "wall_time_s": time.perf_counter() - t0, "form": "E dx' = (J - R) Q dx + B du, dy = B^T Q dx "
-             "(= C dx); A = (J - R) Q; Hess: Hessian of H; E_modes, A_modes: the total-form pencil of modes"}
-    return lin.write(out, extra) if out else extra
+    comm = MPI.COMM_WORLD
+    t = finite_time(t)
+    check_linearizable(about, comm)
+    scene, p = resolve(scene, overrides)
+    t0 = time.perf_counter()
+    started = heading(scene, p, "linearize", comm, about=about, t=t)
+    with owned(out, started, comm) as outdir:
+        lin = linearization(scene, p, about, t, comm)
+        extra = {"scene": scene.name, "rodfem_version": __version__, "parameters": p, "about": about, "t": t,
+                 "wall_time_s": time.perf_counter() - t0, "form": "E dx' = (J - R) Q dx + B du, dy = B^T Q dx "
+                 "(= C dx); A = (J - R) Q; Hess: Hessian of H; E_modes, A_modes: the total-form pencil of modes"}
+        if not outdir:
+            return extra
+        info = {}
+        outdir.do("write the matrices", lambda: info.update(lin.write(out, extra)))
+        outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                  dict(started, status="completed", n_states=info["n_states"], n_inputs=info["n_inputs"],
+                       wall_time_s=time.perf_counter() - t0))
+    return info
 
 
 def run_modes(scene, overrides=None, out=None, about="static", t=0.0, count=6, solver="auto"):
-    """`rodfem modes`: natural frequencies and mode shapes; returns (omega, info).
-
-    Only verified modes (rodfem/la/pencil.py) are printed and written; a model without any
-    oscillating mode is refused (ParameterError) and nothing is written.  info["files"] names the
-    files written: modes.csv and modes.json, and, when a flexible body moves, modes.png and
-    mode_shapes.npz."""
-    import time
+    """`rodfem modes`: natural frequencies and mode shapes (and summary.json) into `out`; returns
+    (omega, info).  Only verified modes (rodfem/la/pencil.py) are printed and written; a model
+    without any oscillating mode is refused (ParameterError, no modes written).  info["files"] names
+    the files written: modes.csv, modes.json, summary.json and, when a flexible body moves,
+    modes.png and mode_shapes.npz.  A signal stops it before the eigenvalue solve."""
+    comm = MPI.COMM_WORLD
+    t = finite_time(t)
     if count < 1:
         raise ParameterError(f"--count must be an integer >= 1 (got {count})")
+    check_linearizable(about, comm)
+    scene, p = resolve(scene, overrides)
     t0 = time.perf_counter()
-    scene, p, lin = prepare(scene, overrides, about, t)
-    omega, vectors, used = natural_modes(lin, count, solver)
-    found = lin.modes_info
-    if not len(omega):
-        raise ParameterError(f"{scene.name} has no oscillating mode about the {about} state ({_none_why(found)}); "
-                             "nothing written")
-    info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
-            "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
-            "damping_ratio": [float(z) for z in lin.damping], "count": count,
-            "residuals": found["residuals"], "fallback": found["fallback"],
-            "eigensolver": {k: v for k, v in found.items() if k not in ("residuals", "fallback", "solver")},
-            "parameters": p, "wall_time_s": time.perf_counter() - t0, "files": []}
-    if out:
-        info["files"] = write_modes(out, lin, omega, vectors, info)
+    started = heading(scene, p, "modes", comm, about=about, t=t, count=count)
+    with owned(out, started, comm) as outdir:
+        lin = linearization(scene, p, about, t, comm)
+        interrupts.check(comm, 0, t, "before the eigenvalue solve")
+        omega, vectors, used = natural_modes(lin, count, solver)
+        found = lin.modes_info
+        if not len(omega):
+            raise ParameterError(f"{scene.name} has no oscillating mode about the {about} state "
+                                 f"({_none_why(found)}); no modes written")
+        info = {"scene": scene.name, "about": about, "t": t, "solver": used, "n_states": lin.Em.shape[0],
+                "omega_rad_s": [float(w) for w in omega], "f_Hz": [float(w / (2 * np.pi)) for w in omega],
+                "damping_ratio": [float(z) for z in lin.damping], "count": count,
+                "residuals": found["residuals"], "fallback": found["fallback"],
+                "eigensolver": {k: v for k, v in found.items() if k not in ("residuals", "fallback", "solver")},
+                "parameters": p, "wall_time_s": time.perf_counter() - t0, "files": []}
+        if outdir:
+            files = []
+            outdir.do("write the modes", lambda: files.extend(write_modes(out, lin, omega, vectors, info)))
+            info["files"] = files + ["summary.json"]
+            outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                      dict(started, status="completed", solver=used, n_states=info["n_states"],
+                           omega_rad_s=info["omega_rad_s"], wall_time_s=time.perf_counter() - t0))
     return omega, info
 
 
@@ -181,8 +272,6 @@ def _none_why(found):
 def write_modes(out, lin, omega, vectors, info):
     """modes.csv, modes.json and, if a flexible body moves, modes.png and mode_shapes.npz; their names."""
     import json
-    import os
-    os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "modes.csv"), "w") as fh:
         fh.write("mode,omega_rad_s,f_Hz,period_s,damping_ratio,residual\n")
         for k, w in enumerate(omega):

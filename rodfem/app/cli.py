@@ -53,6 +53,27 @@ def parse_sets(pairs):
     return overrides
 
 
+def whole(text):
+    """An integer option (--load-steps, --count, --elements) read as the integer parameters are
+    (rodfem/app/scene.py): 10.0 is 10; 10.5, inf and nan are refused."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    if value is None or not value.is_integer():
+        raise argparse.ArgumentTypeError(f"must be an integer (got {text!r})")
+    return int(value)
+
+
+def check_directories(args):
+    """Refuse an empty --out or --resume ('' would otherwise read as none given: the default
+    directory, results/SCENE, cleared)."""
+    for option in ("out", "resume"):
+        value = getattr(args, option, None)
+        if value is not None and not value.strip():
+            raise ParameterError(f"--{option} must name a directory (got {value!r})")
+
+
 def cmd_list(args):
     for name, ep in scenes().items():
         say(f"{name:24s} {ep.load().description}")
@@ -86,6 +107,7 @@ def cmd_run(args):
 
 def cmd_study(args):
     from rodfem.app.study import run_study
+    args.out = args.out or os.path.join("results", f"study-{args.scene}")
     run_study(args.scene, parse_sets(args.set), out=args.out, dts=args.dt, elements=args.elements)
 
 
@@ -114,7 +136,7 @@ def cmd_linearize(args):
         f"{info['n_states']} states, {info['n_inputs']} inputs; |A - (J - R) Q| = {c['ph_residual']:.1e} |A|, "
         f"|f0| = {info['drift_norm']:.1e}")
     say(f"results in {out}/: E.npz J.npz R.npz Q.npz B.npz C.npz A.npz Hess.npz (scipy.sparse.load_npz), "
-        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json")
+        "linear.mat (MATLAB), states.csv (the ordering of the state), linear.json, summary.json")
 
 
 def cmd_modes(args):
@@ -159,7 +181,7 @@ def parser():
     st.add_argument("--set", action="append", metavar="NAME=VALUE")
     st.add_argument("--out", metavar="DIR")
     st.add_argument("--dt", type=float, nargs="+", help="time steps of the sweep")
-    st.add_argument("--elements", type=int, nargs="+", help="element counts of the sweep")
+    st.add_argument("--elements", type=whole, nargs="+", help="element counts of the sweep")
     st.set_defaults(func=cmd_study)
     add_static_parsers(sub)
     return ap
@@ -172,7 +194,7 @@ def add_static_parsers(sub):
     sp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
     sp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE-static)")
     sp.add_argument("--time", type=float, metavar="T", help="the loads at time T (default t_end: the full load)")
-    sp.add_argument("--load-steps", type=int, default=1, metavar="N", help="first load step 1/N (default 1)")
+    sp.add_argument("--load-steps", type=whole, default=1, metavar="N", help="first load step 1/N (default 1)")
     sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
     sp.set_defaults(func=cmd_static)
     for name, func, what in (("linearize", cmd_linearize, "linear PH model E, J, R, Q, B, C of a scene (.npz, .mat)"),
@@ -186,7 +208,7 @@ def add_static_parsers(sub):
                         help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
         lp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
         if name == "modes":
-            lp.add_argument("--count", type=int, default=6, metavar="K", help="number of modes (default 6)")
+            lp.add_argument("--count", type=whole, default=6, metavar="K", help="number of modes (default 6)")
             lp.add_argument("--solver", default="auto", choices=("auto", "slepc", "dense"),
                             help="SLEPc (Krylov-Schur, verified; dense fallback up to 2000 states) or scipy's dense QZ "
                                  "(auto: dense up to 1500 states)")
@@ -201,13 +223,14 @@ def main(argv=None):
     logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
         with interrupts.deferred():
+            check_directories(args)
             args.func(args)
     except InputError as e:
-        return fail(f"rodfem: error: {e}", e.exit_code)
+        return fail(f"rodfem: error: {e}{kept(args, e)}", e.exit_code)
     except NewtonFailure as e:
-        return fail(f"rodfem: error: {e}{kept(args)}", 3)
+        return fail(f"rodfem: error: {e}{kept(args, e)}", 3)
     except Interrupted as e:
-        return fail(f"rodfem: {e}{kept(args)}", e.exit_code)
+        return fail(f"rodfem: {e}{kept(args, e)}", e.exit_code)
     except MemoryError as e:
         return fail(f"rodfem: error: {out_of_memory(e)}", 2)
     except Exception:
@@ -219,9 +242,13 @@ def main(argv=None):
     return 0
 
 
-def kept(args):
-    out = getattr(args, "out", None)
-    return f"; results so far kept in {out}/" if out and args.command == "run" else ""
+def kept(args, error):
+    """'; results so far kept in DIR/' for a run or static solve that stopped (not for bad input), and
+    for an error that says where its results are kept (`error.kept`: a study)."""
+    out = getattr(error, "kept", None)
+    if out is None and not isinstance(error, InputError) and args.command in ("run", "static"):
+        out = getattr(args, "out", None)
+    return f"; results so far kept in {out}/" if out else ""
 
 
 def fail(message, code):

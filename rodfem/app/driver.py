@@ -6,7 +6,7 @@ from contextlib import nullcontext, suppress
 from mpi4py import MPI
 
 from rodfem.analysis.timeloop import Result, run, steps_for
-from rodfem.app.scene import Scene, load
+from rodfem.app.scene import Parameter, Scene, load
 from rodfem.common import interrupts
 from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError, out_of_memory
 from rodfem.io.output import OutDir, RunWriter, plotting, summarize, write_json
@@ -43,20 +43,20 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         n_steps = steps_for(p["dt"], p["t_end"])
     except ValueError as e:
         raise ParameterError(f"parameter 'dt': {e}") from None
+    if continues and saved[0]["step"] > n_steps:
+        raise ParameterError(f"parameter 't_end': {p['t_end']:g} is before the checkpoint's time {saved[0]['t']:g} "
+                             f"(--resume continues to a later t_end)")
     if out:
         plotting()   # the pictures can be drawn: known before the directory is touched
     outdir = OutDir(out, comm) if out else None
     started = {"scene": scene.name, "status": "running", "parameters": p, "mpi_ranks": comm.size,
                "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    # a resumed run: everything checked before the directory is touched (its record stays if refused)
+    problem, start, kept = resumed(scene, p, comm, saved, resume, bool(continues and outdir)) if saved else (None,) * 3
     with outdir.claimed(started, clear=not continues) if outdir else nullcontext():
-        problem = build(scene, p, comm, outdir, started)
-        start = checkpoint.restore(problem, *saved) if saved else None
-        if start and not continues:
-            start = None
-        if start and start.step > n_steps:
-            raise ParameterError(f"parameter 't_end': {p['t_end']:g} is before the checkpoint's time {start.t:g}")
+        problem = problem or build(scene, p, comm, outdir, started)
         if start and outdir:
-            rows = checkpoint.truncate_history(outdir, start.step)
+            rows = checkpoint.truncate_history(outdir, kept)
             result = Result(rows=rows, steps=start.step)
             writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t,
                                            p.get("section", 0.0))
@@ -84,14 +84,26 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
     return result, summary
 
 
+CHECKPOINT_EVERY = Parameter("checkpoint_every", 0, "", "steps between checkpoints (0: none)", low=0)
+
+
+def resumed(scene, p, comm, saved, directory, history):
+    """(problem, start, history lines kept) of a run resumed from the checkpoint `saved` = (meta, arrays)
+    in `directory`: the problem built and put in the checkpoint's state (start None for a new run
+    from a static equilibrium, step 0), and, if `history`, the lines of history.csv up to the
+    checkpoint (rodfem.io.checkpoint.history_lines).  Writes nothing: a refusal leaves the directory
+    as it was."""
+    from rodfem.io import checkpoint
+    kept = checkpoint.history_lines(directory, saved[0], comm) if history else None
+    problem = build(scene, p, comm)
+    start = checkpoint.restore(problem, *saved)
+    return problem, (start if saved[0]["step"] > 0 else None), kept
+
+
 def checkpoint_every(value, out):
-    """The checkpoint interval N (0: none) from --set checkpoint_every=N."""
-    try:
-        every = int(value)
-        if every != float(value) or every < 0:
-            raise ValueError
-    except (TypeError, ValueError):
-        raise ParameterError(f"parameter 'checkpoint_every' must be an integer >= 0 (got {value!r})") from None
+    """The checkpoint interval N (0: none) from --set checkpoint_every=N (an integer parameter like
+    n_elements: 10.0 is 10, 10.5 is refused)."""
+    every = CHECKPOINT_EVERY.value(value)
     if every and not out:
         raise ParameterError("parameter 'checkpoint_every' needs an output directory (--out)")
     return every
@@ -106,7 +118,9 @@ def build(scene, p, comm, outdir=None, started=None):
     try:
         return scene.build(p, comm).build()
     except Exception as error:
-        if interrupts.received():  # whatever the compiler's death looked like
+        if isinstance(error, Interrupted):
+            stop = error
+        elif interrupts.received():  # whatever the compiler's death looked like
             stop = Interrupted(interrupts.received())
         elif isinstance(error, MemoryError):
             stop = out_of_memory(error)
@@ -130,7 +144,8 @@ def stopped(stop):
         return "newton-failure", {"step": stop.step, "t": stop.t, "residual": stop.residual,
                                   "iterations": stop.iterations, "reason": stop.reason}
     if isinstance(stop, Interrupted):
-        return "interrupted", {"signal": stop.signal, "step": stop.step, "t": stop.t}
+        return "interrupted", {"signal": stop.signal, "step": stop.step, "t": stop.t,
+                               **({"where": stop.where} if stop.where else {})}
     return "error", {"message": str(stop)}
 
 

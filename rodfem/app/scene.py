@@ -49,14 +49,22 @@ class Parameter:
             return text
         try:
             value = float(text)
-            if self.kind is int:
-                if value != int(value):
-                    raise ValueError
-                value = int(value)
         except (TypeError, ValueError):
             raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {text!r})") from None
+        if self.kind is int:
+            if not value.is_integer():   # 10.5, inf, nan (10.0 is 10)
+                raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {text!r})")
+            value = int(value)
         self.check(value)
         return value
+
+    def value(self, given):
+        """The value of `given` (a text from --set, or a number from the API), checked; an integer
+        parameter as an int."""
+        if isinstance(given, str):
+            return self.parse(given)
+        self.check(given)
+        return int(given) if self.kind is int else given
 
     def check(self, value):
         if self.choices:
@@ -124,12 +132,7 @@ class Scene:
         """Defaults updated by `overrides` (dict name -> text or value), all checked."""
         p = {q.name: q.default for q in self.parameters}
         for name, value in (overrides or {}).items():
-            q = self.parameter(name)
-            if isinstance(value, str):
-                p[name] = q.parse(value)
-            else:
-                q.check(value)
-                p[name] = int(value) if q.kind is int else value
+            p[name] = self.parameter(name).value(value)
         return p
 
 

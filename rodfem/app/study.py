@@ -57,7 +57,8 @@ from mpi4py import MPI
 
 from rodfem.analysis.timeloop import steps_for
 from rodfem.app.scene import Scene, load
-from rodfem.errors import NewtonFailure, ParameterError
+from rodfem.common import limits
+from rodfem.errors import InputError, Interrupted, NewtonFailure, ParameterError
 from rodfem.io.output import OutDir, write_json
 
 REF_FACTOR = 4
@@ -76,18 +77,21 @@ def _say(*args):
 # -- sweep definition -----------------------------------------------------------
 
 def sweep(p, dts=None, elements=None, levels=DEFAULT_LEVELS):
-    """The refinement paths: dict name -> list of (n_elements, dt)."""
-    n0, dt0 = int(p["n_elements"]), float(p["dt"])
+    """The refinement paths: dict name -> list of (n_elements, dt); the sweep's dts and elements; and
+    notes saying what a single --dt or --elements value means: the fixed value of the other path
+    (one value of each: a single run)."""
+    n0, dt0, notes = int(p["n_elements"]), float(p["dt"]), []
+    one_n, one_dt = bool(elements) and len(set(elements)) == 1, bool(dts) and len(set(dts)) == 1
+    if one_n and not one_dt:
+        n0 = int(elements[0])
+        notes.append(f"--elements {n0}: one value, the element count of the dt path (an n path needs two or more)")
+    if one_dt and not one_n:
+        dt0 = float(dts[0])
+        notes.append(f"--dt {dt0:g}: one value, the time step of the n path (a dt path needs two or more)")
+    if one_n and one_dt:
+        notes.append(f"--dt {float(dts[0]):g} --elements {int(elements[0])}: one value each, a single run")
     dts = sorted({float(d) for d in dts}, reverse=True) if dts else [dt0 / 2**k for k in range(levels)]
     elements = sorted({int(n) for n in elements}) if elements else [n0 * 2**k for k in range(levels)]
-    for d in dts:
-        try:
-            steps_for(d, p["t_end"])
-        except ValueError as e:
-            raise ParameterError(f"--dt {d:g}: {e}") from None
-    for n in elements:
-        if n < 1:
-            raise ParameterError(f"--elements must be >= 1 (got {n})")
     paths = {}
     if len(dts) > 1:
         paths["dt"] = [(n0, d) for d in dts]
@@ -97,7 +101,32 @@ def sweep(p, dts=None, elements=None, levels=DEFAULT_LEVELS):
         paths["dt+n"] = list(zip(elements, dts))
     if not paths:
         paths["single"] = [(elements[0], dts[0])]
-    return paths, dts, elements
+    return paths, dts, elements, notes
+
+
+def check_runs(scene, p, points, reference=None, ref_factor=REF_FACTOR, comm=MPI.COMM_WORLD):
+    """Refuse the study before any run if one of its runs would be refused: every time step (the
+    steps it makes of t_end) and every element count (the scene built up to its first mesh:
+    n_elements in range, fewer than the ranks, too large for the memory), the reference run's
+    (n, dt) too."""
+    runs = [(n, dt, f"--elements {n}", f"--dt {dt:g}") for n, dt in points]
+    if reference:
+        n, dt = reference
+        runs.append((n, dt, f"the reference run's n_elements = {n} ({ref_factor}x the finest)",
+                     f"the reference run's dt = {dt:g} (1/{ref_factor} of the finest)"))
+    for dt, what in sorted({(dt, what) for _, dt, _, what in runs}, reverse=True):
+        try:
+            steps_for(dt, p["t_end"])
+        except ValueError as e:
+            raise ParameterError(f"{what}: {e}") from None
+    for n, what in sorted({(n, what) for n, _, what, _ in runs}):
+        try:
+            with limits.checking():
+                scene.build(scene.values(dict(p, n_elements=n)), comm)
+        except limits.Checked:
+            pass
+        except InputError as e:
+            raise ParameterError(f"{what}: {e}") from None
 
 
 # -- running --------------------------------------------------------------------
@@ -106,7 +135,7 @@ def _run(scene, p, n, dt, repeats=1):
     """One run; returns a record (never raises NewtonFailure)."""
     from rodfem.app.driver import run_scene
     overrides = dict(p, n_elements=n, dt=dt)
-    rec = {"n_elements": n, "dt": dt, "integrator": p["integrator"], "steps": steps_for(dt, p["t_end"])}
+    rec = _record(p, n, dt)
     best = None
     for _ in range(max(1, repeats)):
         try:
@@ -123,6 +152,14 @@ def _run(scene, p, n, dt, repeats=1):
                newton_its_mean=summary["newton_its_mean"], newton_its_max=summary["newton_its_max"],
                max_balance_error=summary["max_balance_error"],
                max_balance_error_relative=summary["max_balance_error_relative"])
+    return rec
+
+
+def _record(p, n, dt, status=None, failure=""):
+    """The record of a run (before it runs, or one that did not: `status`)."""
+    rec = {"n_elements": n, "dt": dt, "integrator": p["integrator"], "steps": steps_for(dt, p["t_end"])}
+    if status:
+        rec.update(status=status, failure=failure, result=None)
     return rec
 
 
@@ -171,43 +208,63 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
               levels=DEFAULT_LEVELS, ref_factor=REF_FACTOR, plot=True, quiet=False):
     """Run the study; write study.csv, study.json, study.md, study.png into `out`.
 
+    Every run is checked before the first one (`check_runs`).  A run that ends the study (an input
+    or output error, an interrupt; a Newton failure does not) leaves the files with the runs finished
+    before it (study.json: "status"), the others marked "not-run", and is re-raised.
     Returns the study dict (what study.json holds, plus the rows).
     """
     scene = scene_name if isinstance(scene_name, Scene) else load(scene_name)
     p = scene.values(overrides)
-    paths, dts, elements = sweep(p, dts, elements, levels)
+    paths, dts, elements, notes = sweep(p, dts, elements, levels)
     out = out or os.path.join("results", f"study-{scene.name}")
     say = (lambda *a: None) if quiet else _say
 
     analytic = scene.reference(p) if scene.reference else None
+    points = list(dict.fromkeys(pt for pts in paths.values() for pt in pts))
+    reference = None if analytic else (ref_factor * max(n for n, _ in points),
+                                       min(dt for _, dt in points) / ref_factor)
+    check_runs(scene, p, points, reference, ref_factor)
     runs = {}
 
     def get(n, dt):
         key = (int(n), float(dt))
         if key not in runs:
             say(f"  run n_elements={n:<5d} dt={dt:<10.4g} ...", )
-            runs[key] = _run(scene, p, n, dt, repeats)
+            try:
+                runs[key] = _run(scene, p, n, dt, repeats)
+            except (InputError, Interrupted) as stop:
+                runs[key] = _record(p, n, dt, "interrupted" if isinstance(stop, Interrupted) else "error", str(stop))
+                raise
             r = runs[key]
             if r["status"] != "completed":
                 say(f"    {r['failure']}")
         return runs[key]
 
     say(f"rodfem study {scene.name}: integrator {p['integrator']}, t_end = {p['t_end']:g}")
-    reference_run = None
+    for note in notes:
+        say(note)
+    reference_run, stop = None, None
     if analytic:
         ref_desc = f"analytic (scene.reference): {', '.join(f'{k} = {v:g}' for k, v in analytic.items())}"
     else:
-        n_ref, dt_ref = ref_factor * max(elements + [int(p['n_elements'])]), min(dts + [float(p['dt'])]) / ref_factor
+        n_ref, dt_ref = reference
         ref_desc = (f"no analytic solution: a run refined far beyond the sweep, n_elements = {n_ref}, "
                     f"dt = {dt_ref:g} ({ref_factor}x the finest of the sweep in each)")
         say(f"reference: {ref_desc}")
-        reference_run = _run(scene, p, n_ref, dt_ref, 1)
-        if reference_run["status"] != "completed":
-            _say(f"rodfem study: the reference run (n_elements = {n_ref}, dt = {dt_ref:g}) failed")
-            raise NewtonFailure(**reference_run["failure_info"])
-    for name, pts in paths.items():
-        for n, dt in pts:
+    try:
+        if reference:
+            reference_run = _run(scene, p, n_ref, dt_ref, 1)
+            if reference_run["status"] != "completed":
+                _say(f"rodfem study: the reference run (n_elements = {n_ref}, dt = {dt_ref:g}) failed")
+                raise NewtonFailure(**reference_run["failure_info"])
+        for n, dt in points:
             get(n, dt)
+    except (InputError, Interrupted) as e:
+        stop = e
+        if not any(r["result"] is not None for r in runs.values()):
+            raise                                     # nothing finished: nothing to keep
+        for n, dt in points:
+            runs.setdefault((int(n), float(dt)), _record(p, n, dt, "not-run", f"not run: the study stopped ({e})"))
 
     # -- errors -------------------------------------------------------------
     first = next((r for r in runs.values() if r["result"] is not None), None)
@@ -273,14 +330,23 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
              "reference_values": {c: float(v) for c, v in zip(cols, q_ref)},
              "orders": orders, "paths": {k: [[n, dt] for n, dt in v] for k, v in paths.items()},
              "failures": [{"n_elements": r["n_elements"], "dt": r["dt"], **r["failure_info"]}
-                          for r in runs.values() if r["status"] != "completed"]}
+                          for r in runs.values() if r["status"] == "newton-failure"],
+             "status": _status(stop), **({"stopped": str(stop)} if stop else {})}
     OutDir(out, MPI.COMM_WORLD).do("write the study", write_files, out, study, rows, plot)
+    if stop:
+        stop.kept = out   # the command line says so
+        raise stop
     for name, o in orders.items():
         say(f"path {name:5s}: observed order {_fmt(o['order'])} (against the reference), "
             f"self-convergence order {_fmt(o['self_order'])}")
     say(f"results in {out}/: study.csv, study.json, study.md, study.png")
     study["rows"] = rows
     return study
+
+
+def _status(stop):
+    """study.json's status: completed, or how the study was stopped."""
+    return "completed" if stop is None else "interrupted" if isinstance(stop, Interrupted) else "error"
 
 
 def write_files(out, study, rows, plot=True):

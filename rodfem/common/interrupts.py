@@ -2,7 +2,8 @@
 
 Inside ``with deferred():`` (the command line wraps every command in it) a
 first SIGINT or SIGTERM only records the signal; the time loop calls
-`check` between steps, which raises `Interrupted` on every rank as soon as
+`check` between steps (the static solve between load steps, `rodfem modes`
+before its eigenvalue solve), which raises `Interrupted` on every rank as soon as
 any rank has seen a signal (under ``mpirun``, which turns a Ctrl-C into a
 SIGTERM to every rank, the ranks may see it at different steps).  The run
 then writes summary.json (status "interrupted") and its plots and exits with
@@ -49,13 +50,14 @@ def received():
     return _state["signum"]
 
 
-def check(comm, step, t):
+def check(comm, step, t, where=None):
     """Between steps: raise Interrupted on every rank if any rank has received a signal.
 
     Collective inside `deferred` (every rank calls it at the same step); free outside.
+    `where` (optional) says where the run stopped if not "after step n (t = ...)" (rodfem.errors.Interrupted).
     """
     if not _state["active"]:
         return
     signum = comm.allreduce(_state["signum"], op=MPI.MAX)
     if signum:
-        raise Interrupted(signum, step, t)
+        raise Interrupted(signum, step, t, where)

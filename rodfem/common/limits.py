@@ -1,4 +1,4 @@
-"""What a run may ask for: a bounded number of steps, a mesh that fits in memory and
+"""What a run may ask for: a bounded number of (time or load) steps, a mesh that fits in memory and
 at least one element per MPI rank.  Refused with one line giving the estimate.
 
 Memory per element, measured (peak RSS of a run, LU factorisation included):
@@ -8,10 +8,11 @@ banded matrix of bandwidth ~ d).
 """
 import numbers
 import resource
+from contextlib import contextmanager
 
 from mpi4py import MPI
 
-from rodfem.errors import InputError
+from rodfem.errors import InputError, ParameterError
 
 MAX_STEPS = 10**7
 BYTES_PER_DOF = 600.0           # a
@@ -65,11 +66,49 @@ def check_elements(n_elements, dofs_per_element, comm):
         raise InputError(f"n_elements = {n} needs about {n * per_element / 1e9:.3g} GB ({dofs_per_element} dofs, "
                          f"{per_element / 1e3:.3g} KB per element) but {have / 1e9:.3g} GB are available: "
                          f"at most about {int(have / per_element)} elements fit")
+    if _checking["on"]:
+        raise Checked(n)
     return n
+
+
+class Checked(Exception):
+    """Raised by check_elements inside `checking()` once a mesh has passed: the build stops there."""
+
+
+_checking = {"on": False}
+
+
+@contextmanager
+def checking():
+    """Inside the block a scene's build stops at its first mesh, once check_elements has passed it
+    (`Checked`): its parameters checked without the cost of building (rodfem study checks every run of
+    a sweep this way before running any)."""
+    _checking["on"] = True
+    try:
+        yield
+    finally:
+        _checking["on"] = False
+
+
+def shown(x, other):
+    """x with as few digits as show that it is not `other` (at least 3): 10000001 against 1e7,
+    10.000001 against 10, not 1e+07 and 10."""
+    for digits in range(3, 18):
+        text = f"{x:.{digits}g}"
+        if float(text) != other:
+            return text
+    return repr(x)
 
 
 def check_steps(n_steps):
     """Refuse more than MAX_STEPS time steps (the history is kept in memory, ~1 KB per step)."""
     if n_steps > MAX_STEPS:
-        raise ValueError(f"t_end/dt = {n_steps:.3g} steps, more than the limit of {MAX_STEPS:.0e} "
+        raise ValueError(f"t_end/dt = {shown(n_steps, MAX_STEPS)} steps, more than the limit of {MAX_STEPS:.0e} "
                          f"(~{n_steps * 1e3 / 1e9:.3g} GB of history; choose a larger dt or a smaller t_end)")
+
+
+def check_load_steps(steps):
+    """Refuse a first load step below 1/MAX_STEPS (--load-steps N: at most MAX_STEPS load steps)."""
+    if steps > MAX_STEPS:
+        raise ParameterError(f"--load-steps {shown(steps, MAX_STEPS)}: more than the limit of {MAX_STEPS:.0e} "
+                             f"load steps (the first load step is 1/N; choose N in [1, {MAX_STEPS:.0e}])")

@@ -22,6 +22,8 @@ def _build(prefix, source, declarations):
     os.makedirs(cache, exist_ok=True)
     found = [f for f in os.listdir(cache) if f.startswith(name) and f.endswith(".so")]
     if not found:
+        from rodfem.fem.jit import hold
+        hold(cache)   # compiling into the cache: under its lock
         ffi = cffi.FFI()
         ffi.cdef(declarations)
         ffi.set_source(name, source, extra_compile_args=["-O3", "-g0"])

@@ -136,3 +136,25 @@ def jit_cache_dir():
     from dolfinx import jit
     options = jit.get_options() if hasattr(jit, "get_options") else jit.get_parameters()
     return Path(options["cache_dir"])
+
+
+def hook_jit_lookup(before):
+    """Have ffcx call before(module_name, cache_dir) each time it looks a module up in the JIT cache
+    (where it either loads a compiled module or claims it and compiles): ffcx's
+    ``codegeneration.jit.get_cached_module``.  False if this ffcx has no such function."""
+    import functools
+
+    import ffcx.codegeneration.jit as ffcx_jit
+    lookup = getattr(ffcx_jit, "get_cached_module", None)
+    if lookup is None:   # pragma: no cover - another ffcx
+        return False
+    if getattr(lookup, "rodfem_hook", None) is not None:
+        lookup = lookup.rodfem_hook
+
+    @functools.wraps(lookup)
+    def hooked(module_name, object_names, cache_dir, *args, **kwargs):
+        before(module_name, cache_dir)
+        return lookup(module_name, object_names, cache_dir, *args, **kwargs)
+    hooked.rodfem_hook = lookup
+    ffcx_jit.get_cached_module = hooked
+    return True

@@ -5,15 +5,24 @@ with NAME.c.cached; a process that finds NAME.c without NAME.c.cached takes it
 for a compilation in progress, waits 10 s and fails.  A compilation killed
 midway thus left NAME.c behind and broke every later run of that form.
 
-rodfem compiles under a lock: rank 0 of a Problem's communicator holds an
-exclusive ``fcntl.flock`` on CACHE/rodfem-jit.lock while the Problem is built
-(the other ranks only load what rank 0 compiled).  A NAME.c without
-NAME.c.cached found while holding the lock was therefore left by a compilation
+rodfem compiles under a lock: inside `locked(comm)` (a Problem being built,
+forms being compiled), rank 0 of `comm` takes an exclusive ``fcntl.flock`` on
+CACHE/rodfem-jit.lock as soon as a module it needs is not in the cache
+(ffcx's lookup of a module is hooked, rodfem.fem.compat.hook_jit_lookup), and
+holds it to the end of the block; the other ranks only load what rank 0
+compiled.  A run whose modules are all compiled never takes the lock, so it
+is not held up by another run compiling (or stopped, or stuck).  A NAME.c
+without NAME.c.cached found while holding the lock was left by a compilation
 that died, and is removed, so ffcx compiles it afresh (so is a NAME.c.cached
-whose NAME.c is gone).  The lock also makes a
-second run wait for a first one compiling the same forms instead of timing out.
-(A program other than rodfem compiling into the same cache at the same moment
-is not covered: give it its own XDG_CACHE_HOME.)
+whose NAME.c is gone).  The lock also makes a second run wait for a first one
+compiling the same forms instead of timing out.  (A program other than rodfem
+compiling into the same cache at the same moment is not covered: give it its
+own XDG_CACHE_HOME.)
+
+Waiting for the lock says so on stderr, naming the holder (its pid, written
+into the lock file, and whether it is stopped), stops on SIGINT/SIGTERM
+inside `rodfem.common.interrupts.deferred` (`Interrupted`), and gives up after
+RODFEM_JIT_LOCK_TIMEOUT seconds (default 600) with an InputError (exit 2).
 
 Errors of the cache itself (a directory that cannot be created or written, a
 damaged module) become one InputError naming the directory and the remedy.
@@ -22,13 +31,19 @@ import fcntl
 import functools
 import inspect
 import os
+import sys
+import time
 from contextlib import contextmanager
 
-from rodfem.errors import InputError, agreed
+from rodfem.common import interrupts
+from rodfem.errors import InputError, Interrupted, agreed
 from rodfem.fem import compat
 
 LOCK_NAME = "rodfem-jit.lock"
-_held = {"depth": 0}
+TIMEOUT_VARIABLE = "RODFEM_JIT_LOCK_TIMEOUT"
+DEFAULT_TIMEOUT = 600.0   # seconds
+POLL = 0.1                # seconds between two tries of the lock
+_held = {"depth": 0, "root": False, "fd": None, "error": None}
 
 
 def stale_sources(cache_dir):
@@ -68,49 +83,163 @@ def _converted(e, cache_dir):
 
 
 def _acquire(cache_dir):
-    """Open and lock CACHE/rodfem-jit.lock (waits for another run compiling); remove stale sources."""
+    """Open and lock CACHE/rodfem-jit.lock (waiting for a run compiling); remove stale sources."""
+    path = os.path.join(cache_dir, LOCK_NAME)
     try:
         os.makedirs(cache_dir, exist_ok=True)
-        fd = os.open(os.path.join(cache_dir, LOCK_NAME), os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     except OSError as e:
         raise _unusable(cache_dir, e) from None
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        for path in stale_sources(cache_dir):
-            os.unlink(path)
+        _wait_for(fd, path)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        for stale in stale_sources(cache_dir):
+            os.unlink(stale)
     except OSError as e:
         os.close(fd)
         raise _unusable(cache_dir, e) from None
+    except BaseException:
+        os.close(fd)
+        raise
     return fd
+
+
+def lock_timeout():
+    """Seconds to wait for the cache lock: $RODFEM_JIT_LOCK_TIMEOUT, default DEFAULT_TIMEOUT."""
+    text = os.environ.get(TIMEOUT_VARIABLE, "").strip()
+    if not text:
+        return DEFAULT_TIMEOUT
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value >= 0:
+        raise InputError(f"{TIMEOUT_VARIABLE} must be a number of seconds >= 0 (got {text!r})")
+    return value
+
+
+def _wait_for(fd, path):
+    """Take the lock on `fd`; while another process holds it, say so once, stop on a signal, give up
+    after lock_timeout() seconds."""
+    timeout, t0, told = lock_timeout(), time.monotonic(), False
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            pass
+        holder, hint = _holder(fd)
+        if not told:
+            _tell(f"rodfem: waiting for the JIT cache lock {path}, held by {holder} (compiling forms); giving up "
+                  f"after {timeout:g} s ({TIMEOUT_VARIABLE}=SECONDS to change){hint}")
+            told = True
+        if interrupts.received():
+            raise Interrupted(interrupts.received(), where="while waiting for the JIT cache lock")
+        if time.monotonic() - t0 >= timeout:
+            raise InputError(f"the JIT cache lock {path} is still held by {holder} after {timeout:g} s"
+                             f"{hint or ': end that process or let it finish'}, or set {TIMEOUT_VARIABLE}=SECONDS "
+                             f"to wait longer")
+        time.sleep(POLL)
+
+
+def _holder(fd):
+    """('pid N' of the process holding the lock, from the lock file; a hint if it is stopped)."""
+    try:
+        pid = int(os.pread(fd, 32, 0).decode().strip())
+    except (OSError, ValueError):
+        return "another process", ""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            state = f.read().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        state = ""
+    stopped = state in ("T", "t")
+    return f"pid {pid}", (f"; it is stopped (Ctrl-Z?): resume it with kill -CONT {pid}, or end it" if stopped else "")
+
+
+def _tell(line):
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except OSError:
+        pass
+
+
+def _ready(module_name, cache_dir):
+    """Whether ffcx will load `module_name` from the cache rather than compile it (or wait for it)."""
+    source = os.path.join(cache_dir, module_name + ".c")
+    return os.path.exists(source) and os.path.exists(source + ".cached")
+
+
+def _before_lookup(module_name, cache_dir):
+    """ffcx is about to look up `module_name` in `cache_dir`: inside `locked`, rank 0 takes the lock
+    first if the module is not compiled yet."""
+    if _held["depth"] and not _ready(module_name, cache_dir):
+        hold(cache_dir)
+
+
+def hold(cache_dir=None):
+    """Take the cache lock now (inside `locked`, on the rank that compiles; held to the end of the
+    block): before compiling into the cache.  An error is kept for `locked` to agree on."""
+    if not (_held["depth"] and _held["root"]) or _held["fd"] is not None:
+        return
+    try:
+        _held["fd"] = _acquire(cache_dir or compat.jit_cache_dir())
+    except (InputError, Interrupted) as e:
+        _held["error"] = e
+        raise
+
+
+HOOKED = compat.hook_jit_lookup(_before_lookup)
 
 
 @contextmanager
 def locked(comm):
-    """Hold the cache lock (rank 0 of `comm`) for the block; cache errors in the block become InputErrors.
+    """The block may compile into the JIT cache: rank 0 of `comm` takes the cache lock when a module
+    is not compiled yet (at once if ffcx's lookup could not be hooked) and keeps it to the end;
+    cache errors in the block become InputErrors.
 
     Collective.  Re-entrant (a Problem built while another is being built in the same process).
     """
     cache_dir = compat.jit_cache_dir()
-    fd = None
-    with agreed(comm):
-        if comm.rank == 0 and _held["depth"] == 0:
-            fd = _acquire(cache_dir)
+    outer = _held["depth"] == 0
+    if outer:
+        _held.update(root=comm.rank == 0, fd=None, error=None)
     _held["depth"] += 1
     try:
+        if outer and not HOOKED:
+            with agreed(comm):
+                hold(cache_dir)
         yield
     except (ImportError, OSError, RuntimeError) as e:
         error = _converted(e, cache_dir)
         if comm.size > 1 and "just-in-time" in str(e):  # DOLFINx's report of rank 0's failure, on every rank
-            with agreed(comm):
-                if error is not None:
-                    raise error from None
+            _agree(comm, error)
         if error is None:
             raise
         raise error from None
     finally:
         _held["depth"] -= 1
-        if fd is not None:
-            os.close(fd)  # releases the lock
+        if outer and _held["fd"] is not None:
+            os.close(_held["fd"])  # releases the lock
+            _held["fd"] = None
+
+
+def _agree(comm, error):
+    """Raise on every rank what stopped rank 0's compilation (collective): the interrupt or InputError
+    met taking the lock (`hold`), else the cache error `error` of any rank."""
+    own = _held["error"]
+    met = comm.allgather(None if own is None else (getattr(own, "signum", 0), str(own)))
+    first = next((m for m in met if m is not None), None)
+    if first is None:
+        with agreed(comm):
+            if error is not None:
+                raise error from None
+        return
+    signum, message = first
+    if signum:
+        raise Interrupted(signum, where="while waiting for the JIT cache lock") from None
+    raise (own or InputError(message)) from None
 
 
 def compiles(init):

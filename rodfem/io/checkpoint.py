@@ -22,6 +22,11 @@ scene with the stored parameters, loads the checkpoint and continues: the
 rows of history.csv after the checkpoint (and a partly written last row) are
 dropped, the following rows appended, so history.csv equals that of the
 uninterrupted run.  Only ``t_end`` (to run further) may be changed.
+Everything is checked before DIR is touched (a refused resume leaves its
+summary.json and history.csv as they were): the checkpoint must fit the
+scene's mesh, and be of the run in DIR (the scene and parameters of its
+summary.json, the t and H of its history row at the checkpoint's step), not
+one copied in from another run.
 
 Newton itself keeps state across steps when it reuses its Jacobian (the
 chord Newton of the 3D rod scenes, ``snes_lag_jacobian`` persisting): a run
@@ -44,7 +49,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rodfem.errors import ParameterError
+from rodfem.errors import ParameterError, agreed
 from rodfem.la.lu_chain import LU_CHAIN, lu_name
 
 FORMAT = 1
@@ -108,24 +113,34 @@ def _pack(problem, arrays, comm):
 
 
 def _unpack(problem, data, arrays):
-    """Fill `arrays` (body name -> W-local array, ghosts included) from the saved fields."""
+    """Fill `arrays` (body name -> W-local array, ghosts included) from the saved fields.
+
+    Returns None, or what does not fit (a field missing, or saved at other nodes: another mesh);
+    every rank goes through every field all the same (collective: `restore` agrees on the verdict)."""
+    misfit = None
     for bname, body in _bodies(problem):
         arr = arrays[bname]
         for f in body.space.fields:
+            what = f"field {f.name} of body {bname or 'the scene'}"
+            if f"{bname}/{f.name}" not in data:
+                misfit = misfit or f"the checkpoint has no {what} (another scene?)"
+                continue
             keys, vals = data[f"{bname}/{f.name}"]
             if body.rigid:
                 dofs = _rigid_dofs(body, f.name)
-                if len(dofs):
+                if len(dofs) and vals.size == len(dofs):
                     arr[dofs] = vals.reshape(-1)
+                elif len(dofs):
+                    misfit = misfit or f"the checkpoint does not fit {what} (another model?)"
                 continue
             dofs, mykeys, _ = _field_keys(body, f.name)
             index = {(int(a), int(b)): i for i, (a, b) in enumerate(keys)}
-            try:
-                rows = np.array([index[(int(a), int(b))] for a, b in mykeys], dtype=int)
-            except KeyError:
-                raise ParameterError(f"the checkpoint does not fit field {f.name} of body {bname or 'the scene'} "
-                                     "(another mesh?)") from None
-            arr[dofs] = vals[rows] if len(rows) else arr[dofs]
+            rows = [index.get((int(a), int(b))) for a, b in mykeys]
+            if None in rows or (len(rows) and vals.shape[1:] != arr[dofs].shape[1:]):
+                misfit = misfit or f"the checkpoint does not fit {what} (another mesh?)"
+                continue
+            arr[dofs] = vals[np.array(rows, dtype=int)] if len(rows) else arr[dofs]
+    return misfit
 
 
 class Layout:
@@ -275,8 +290,13 @@ def restore(problem, meta, arrays):
 
     def vector(which):
         bodies, lam = layout.split(layout.current())
-        _unpack(problem, _fields(arrays, which), bodies)
+        misfit = _unpack(problem, _fields(arrays, which), bodies)
         lam_all = arrays.get(f"{which}:lam", np.zeros(0))
+        if len(lam_all) < layout.layout.sizes[-1]:
+            misfit = misfit or "the checkpoint does not fit the joints' multipliers (another mechanism?)"
+        with agreed(comm):
+            if misfit:
+                raise ParameterError(f"{misfit}: it cannot be resumed")
         lam = np.asarray(lam_all[: layout.layout.sizes[-1]], dtype=float)   # all on rank 0
         return layout.join(bodies, lam)
 
@@ -306,37 +326,79 @@ def resume_parameters(meta, directory, overrides):
 
 # -- the output directory of a resumed run ------------------------------------------------------------
 
-def truncate_history(outdir, step):
-    """Keep the header and the rows of steps 0..step of history.csv in the OutDir (collective);
-    returns them (dicts) on rank 0, [] elsewhere."""
-    rows, error = [], None
-    if outdir.comm.rank == 0:
+def history_lines(directory, meta, comm):
+    """The lines (header and steps 0..step) of DIR/history.csv a resumed run keeps, on rank 0 ([] elsewhere),
+    after checking that the checkpoint is of the run in DIR (collective; nothing is written):
+    its summary.json's scene and parameters, and its history row at the checkpoint's step."""
+    lines, error = [], None
+    if comm.rank == 0:
         try:
-            rows = _truncate(outdir.path, step)
+            _same_run(directory, meta)
+            lines = _kept_lines(directory, meta)
         except ParameterError as e:
             error = str(e)
-    error = outdir.comm.bcast(error, root=0)
+    error = comm.bcast(error, root=0)
     if error:
         raise ParameterError(error)
-    return rows
+    return lines
 
 
-def _truncate(out, step):
-    path = os.path.join(out, "history.csv")
+def _same_run(directory, meta):
+    """Refuse a checkpoint whose scene or parameters are not those of DIR/summary.json (a copy of another run's)."""
+    try:
+        with open(os.path.join(directory, "summary.json")) as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return   # no summary (deleted, or killed while writing it): history.csv decides
+    copied = "(copied from another run?): resume in the directory it was written in"
+    if summary.get("scene") != meta.get("scene"):
+        raise ParameterError(f"the checkpoint in {directory} is of scene {meta.get('scene')}, but {directory}/"
+                             f"summary.json is of scene {summary.get('scene')} {copied}")
+    mine, theirs = meta.get("parameters", {}), summary.get("parameters", {})
+    for name in sorted(set(mine) | set(theirs)):
+        if name not in CHANGEABLE and mine.get(name) != theirs.get(name):
+            raise ParameterError(f"the checkpoint in {directory} has {name} = {mine.get(name)!r}, but {directory}/"
+                                 f"summary.json has {name} = {theirs.get(name)!r} {copied}")
+
+
+def _kept_lines(directory, meta):
+    step = int(meta["step"])
+    path = os.path.join(directory, "history.csv")
     if not os.path.isfile(path):
-        raise ParameterError(f"{out} has a checkpoint but no history.csv: cannot continue it")
+        raise ParameterError(f"{directory} has a checkpoint but no history.csv: cannot continue it")
     with open(path, newline="") as f:
-        text = f.read()
-    lines = text.splitlines(keepends=True)
-    keep = lines[: step + 2]
-    if len(keep) < step + 2 or not keep[-1].endswith("\n"):
+        lines = f.read().splitlines(keepends=True)[: step + 2]
+    if len(lines) < step + 2 or not lines[-1].endswith("\n"):
         raise ParameterError(f"{path} has fewer rows than the checkpoint's step {step}: cannot continue it")
+    row = next(csv.DictReader(io.StringIO(lines[0] + lines[-1])))
+    try:
+        t, H = float(row["t"]), float(row["H"])
+    except (KeyError, TypeError, ValueError):
+        t = H = float("nan")
+    if not (_close(t, meta["t"]) and _close(H, meta["H"])):
+        raise ParameterError(f"the checkpoint in {directory} (step {step}, t = {meta['t']:.6g}, H = {meta['H']:.6g}) "
+                             f"is not of the run in {path} (its step {step}: t = {t:.6g}, H = {H:.6g}) "
+                             "(copied from another run?): resume in the directory it was written in")
+    return lines
+
+
+def _close(a, b):
+    return abs(a - b) <= 1e-12 * max(abs(a), abs(b), 1e-300)
+
+
+def truncate_history(outdir, lines):
+    """history.csv in the OutDir cut to `lines` (from `history_lines`; collective); returns its rows
+    (dicts) on rank 0, [] elsewhere."""
+    outdir.do("cut history.csv at the checkpoint", _rewrite, outdir.file("history.csv"), "".join(lines))
+    rows = list(csv.DictReader(io.StringIO("".join(lines))))
+    return [{k: (int(float(v)) if k == "newton_its" else float(v)) for k, v in r.items()} for r in rows]
+
+
+def _rewrite(path, text):
     tmp = path + f".tmp{os.getpid()}"
     with open(tmp, "w", newline="") as f:
-        f.write("".join(keep))
+        f.write(text)
     os.replace(tmp, path)
-    rows = list(csv.DictReader(io.StringIO("".join(keep))))
-    return [{k: (int(float(v)) if k == "newton_its" else float(v)) for k, v in r.items()} for r in rows]
 
 
 def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):

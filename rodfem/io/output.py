@@ -94,8 +94,8 @@ class OutDir:
     Rank 0 does the file work; `do` is collective and turns an OSError into an InputError on every rank.
     """
 
-    def __init__(self, path, comm):
-        self.path, self.comm = str(path), comm
+    def __init__(self, path, comm, subdir="centreline"):
+        self.path, self.comm, self.subdir = str(path), comm, subdir   # subdir: made with the directory
         self.root = comm.rank == 0
         self._lock = None
 
@@ -116,7 +116,7 @@ class OutDir:
         """Lock the directory, clear a previous run's files (not when `clear` is false: a run resumed
         from its checkpoint, rodfem/io/checkpoint.py), write summary.json (status "running");
         release the lock at the end of the block."""
-        self.do("create the directory", os.makedirs, os.path.join(self.path, "centreline"), 0o777, True,
+        self.do("create the directory", os.makedirs, os.path.join(self.path, self.subdir or ""), 0o777, True,
                 hint="; --out must name a directory that can be created and written")
         try:
             self.do("lock the directory", self._take_lock)

@@ -66,3 +66,49 @@ def test_roll_up_against_the_analytic_circle(tmp_path):
 
 def test_bad_dt_is_a_parameter_error(tmp_path):
     assert main(["study", "roll-up-2d", "--out", str(tmp_path), "--dt", "0.3", "0.1"]) == 2
+
+
+RU = ["study", "roll-up-2d", "--set", "t_end=0.1", "--set", "dt=0.05", "--set", "frames=1"]
+
+
+def test_one_element_count_is_the_dt_paths(tmp_path, capsys):
+    """--elements 20 alone: the dt path runs at 20 elements, and says so (it ran at the scene's 10, silently)."""
+    assert main([*RU, "--elements", "20", "--out", str(tmp_path)]) == 0
+    assert "--elements 20: one value, the element count of the dt path" in capsys.readouterr().out
+    with open(tmp_path / "study.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert rows and {(r["path"], r["n_elements"]) for r in rows} == {("dt", "20")}
+
+
+def test_every_run_is_checked_before_any_runs(tmp_path, capsys):
+    """An element count that cannot fit is refused before the first run (the study ran four, then failed
+    at the last one and kept nothing)."""
+    assert main([*RU, "--elements", "4", "1000000000", "--out", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert "run n_elements" not in captured.out
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rodfem: error: --elements 1000000000: n_elements = 1000000000 "
+                                                   "needs about"), lines
+    assert not tmp_path.exists() or not list(tmp_path.iterdir())
+
+
+def test_finished_runs_are_kept_when_a_later_one_fails(tmp_path, capsys, monkeypatch):
+    """A run that ends the study (an output or input error, an interrupt) leaves study.csv with the runs
+    finished before it; the others are marked not run."""
+    from rodfem.app import study as study_module
+    from rodfem.errors import InputError
+    real = study_module._run
+
+    def failing(scene, p, n, dt, repeats=1):
+        if dt < 0.02:
+            raise InputError("the disk is full (simulated)")
+        return real(scene, p, n, dt, repeats)
+    monkeypatch.setattr(study_module, "_run", failing)
+    assert main([*RU, "--dt", "0.05", "0.025", "0.0125", "--elements", "4", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"rodfem: error: the disk is full (simulated); results so far kept in {tmp_path}/"]
+    with open(tmp_path / "study.csv") as f:
+        rows = {float(r["dt"]): r for r in csv.DictReader(f)}
+    assert rows[0.05]["status"] == rows[0.025]["status"] == "completed" and float(rows[0.025]["error"]) > 0
+    assert rows[0.0125]["status"] == "error" and "disk is full" in rows[0.0125]["failure"]
+    assert json.loads((tmp_path / "study.json").read_text())["status"] == "error"

@@ -55,6 +55,11 @@ BAD_INPUT = [
     (["run", "roll-up-2d", "--set", "integrator=euler"], ["'integrator'", "midpoint, discrete-gradient"]),
     (["run", "roll-up-2d", "--set", "dt=0.3"], ["'dt'", "whole number of steps"]),
     (["run", "roll-up-2d", "--set", "EA=nan"], ["'EA'"]),
+    # integer parameters: all alike (10.0 is 10; 10.5, inf, nan are refused)
+    (["run", "roll-up-2d", "--set", "n_elements=inf"], ["'n_elements'", "integer >= 1", "(got 'inf')"]),
+    (["run", "roll-up-2d", "--set", "checkpoint_every=10.5"], ["'checkpoint_every'", "integer >= 0", "'10.5'"]),
+    (["run", "roll-up-2d", "--set", "checkpoint_every=inf"], ["'checkpoint_every'", "integer >= 0"]),
+    (["run", "roll-up-2d", "--set", "checkpoint_every=-1"], ["'checkpoint_every'", "integer >= 0"]),
     # upper bounds of a range
     (["run", "roll-up-2d", "--set", "degree=4"], ["'degree'", "[1, 3]", "(got 4)"]),
     (["run", "hanging-cable", "--set", "angle=181"], ["'angle'", "[-180, 180]", "(got 181)"]),
@@ -74,6 +79,38 @@ def test_bad_input_is_one_line(args, words, capsys, tmp_path):
     assert len(err.splitlines()) == 1 and err.startswith("rodfem: error:")
     for w in words:
         assert w in err
+
+
+def test_integer_options_are_read_like_integer_parameters():
+    from rodfem.app.cli import parser
+    args = parser().parse_args(["static", "roll-up-2d", "--load-steps", "2.0"])
+    assert args.load_steps == 2 and type(args.load_steps) is int
+    for bad in ("2.5", "inf", "nan", "two"):
+        with pytest.raises(SystemExit):
+            parser().parse_args(["static", "roll-up-2d", "--load-steps", bad])
+
+
+def test_integer_parameters_take_a_whole_float(tmp_path):
+    """checkpoint_every=5.0 is 5, as n_elements=4.0 is 4."""
+    args = ["run", "roll-up-2d", "--set", "t_end=0.05", "--set", "dt=0.01", "--quiet", "--out", str(tmp_path)]
+    assert main([*args, "--set", "n_elements=4.0", "--set", "checkpoint_every=5.0"]) == 0
+    assert (tmp_path / "checkpoint.npz").exists()
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["parameters"]["n_elements"] == 4 and s["n_elements"] == 4
+
+
+@pytest.mark.parametrize("command", ["run", "static", "linearize", "modes", "study", "resume"])
+def test_an_empty_out_is_refused(command, capsys, tmp_path, monkeypatch):
+    """--out '' (or --resume '') is refused, not taken for the default results/SCENE (which it cleared)."""
+    monkeypatch.chdir(tmp_path)
+    default = tmp_path / "results" / "roll-up-2d"
+    default.mkdir(parents=True)
+    (default / "summary.json").write_text("mine")
+    args = {"resume": ["run", "--resume", "", "--quiet"]}.get(command, [command, "roll-up-2d", "--out", ""])
+    assert main(args) == 2
+    option = "--resume" if command == "resume" else "--out"
+    assert capsys.readouterr().err.strip().splitlines() == [f"rodfem: error: {option} must name a directory (got '')"]
+    assert (default / "summary.json").read_text() == "mine" and len(list((tmp_path / "results").iterdir())) == 1
 
 
 @pytest.mark.parametrize("setting, message", [

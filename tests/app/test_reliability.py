@@ -28,9 +28,9 @@ def one_line(stderr, start="rodfem: error:"):
     return lines[0]
 
 
-def rows(out):
-    """The rows of history.csv."""
-    with open(os.path.join(out, "history.csv")) as f:
+def rows(out, name="history.csv"):
+    """The rows of history.csv (or another CSV file of the run)."""
+    with open(os.path.join(out, name)) as f:
         return list(csv.DictReader(f))
 
 
@@ -49,10 +49,16 @@ def leftovers(out):
     pytest.param(["run", *RU, "--set", "t_end=1e12", "--set", "dt=1"], ["'dt'", "1e+12 steps"], id="t_end-too-long"),
     pytest.param(["run", "flying-spaghetti-2d", "--set", "t_end=1e-9", "--set", "dt=7e-10"], ["'dt'", "whole number"],
                  id="dt-not-a-divisor"),
+    pytest.param(["run", *RU, "--set", "t_end=10.000001", "--set", "dt=1e-6"],
+                 ["t_end/dt = 10000001 steps, more than the limit of 1e+07"], id="just-above-the-limit"),
+    pytest.param(["run", *RU, "--set", "t_end=1.0000001", "--set", "dt=0.1"], ["(t_end/dt = 10.000001)"],
+                 id="almost-whole"),
     pytest.param(["run", *RU, "--set", "n_elements=1e20"], ["n_elements", "GB", "elements fit"], id="mesh-too-large"),
     pytest.param(["run", *RU, "--set", "n_elements=2.5"], ["'n_elements'", "integer"], id="elements-not-integer"),
     pytest.param(["run", *RU, "--set", "t_end=1e308", "--set", "dt=1e-308"], ["'dt'", "limit"], id="float-overflow"),
     pytest.param(["study", "roll-up-2d", "--dt", "0", "--elements", "4"], ["--dt 0", "> 0"], id="study-dt-zero"),
+    pytest.param(["static", "roll-up-2d", "--load-steps", "1000000000"],
+                 ["--load-steps 1e+09: more than the limit of 1e+07 load steps"], id="static-too-many-load-steps"),
 ])
 def test_bad_input_is_refused_in_one_line(args, words, capsys, tmp_path):
     out = tmp_path / "out"
@@ -195,16 +201,28 @@ def test_a_second_run_continues_in_time():
 
 # -- interrupts and the standard streams -------------------------------------------------
 
-def wait_for_rows(out, count=20, timeout=60):
+def wait_for_rows(out, count=20, timeout=60, name="history.csv"):
     t0 = time.time()
     while time.time() - t0 < timeout:
         try:
-            if len(rows(out)) >= count:
+            if len(rows(out, name)) >= count:
                 return
         except (OSError, ValueError):
             pass
         time.sleep(0.05)
-    raise AssertionError("the run wrote no rows")
+    raise AssertionError(f"the run wrote no rows into {name}")
+
+
+def wait_for_status(out, status="running", timeout=60):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        try:
+            if summary(out)["status"] == status:
+                return
+        except (OSError, ValueError, KeyError):
+            pass
+        time.sleep(0.05)
+    raise AssertionError(f"no summary.json with status {status!r} in {out}")
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
@@ -222,6 +240,41 @@ def test_a_signal_stops_between_steps_and_keeps_the_results(sig, code, tmp_path)
     assert s["status"] == "interrupted" and s["failure"]["signal"] == sig.name
     assert len(rows(out)) == s["steps"] + 1 and f"after step {s['steps']} " in line
     assert os.path.getsize(os.path.join(out, "shapes.png")) > 1000 and not leftovers(out)
+
+
+STATIC = ["static", "roll-up-2d", "--set", "n_elements=4", "--load-steps", "100000", "--fixed-steps"]
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_static_stops_between_load_steps(sig, code, tmp_path):
+    """`rodfem static` stops between two load steps like `run` between time steps (it ran on to the
+    end, exit 0, and a second signal did not stop it either)."""
+    out = str(tmp_path)
+    p = subprocess.Popen(command(*STATIC, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=environment(), cwd=REPO)
+    wait_for_rows(out, name="loadsteps.csv")
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == code, err[-3000:]
+    line = one_line(err, f"rodfem: interrupted by {sig.name} after load step ")
+    assert f"results so far kept in {out}/" in line
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["failure"]["signal"] == sig.name and s["mode"] == "static"
+    assert 20 <= len(rows(out, "loadsteps.csv")) < 100000 and not leftovers(out)
+
+
+def test_modes_stop_before_the_eigenvalue_solve(tmp_path):
+    """`rodfem modes` stops on a signal before its eigenvalue solve; its summary.json says so."""
+    out = str(tmp_path)
+    p = subprocess.Popen(command("modes", "cantilever-2d", "--set", "n_elements=100", "--out", out),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment(), cwd=REPO)
+    wait_for_status(out)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err[-3000:]
+    one_line(err, "rodfem: interrupted by SIGINT")
+    s = summary(out)
+    assert s["status"] == "interrupted" and s["mode"] == "modes" and not os.path.exists(os.path.join(out, "modes.csv"))
 
 
 def test_a_full_or_closed_stdout(tmp_path):
@@ -256,13 +309,18 @@ def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):
     one_line(err, "rodfem: interrupted by SIGINT after step 0")
     assert summary(out)["status"] == "interrupted"
     assert rodfem("run", *RU, "--out", out, timeout=120, env=xdg).returncode == 0
-    # a compilation killed outright leaves NAME.c without NAME.c.cached: removed, not waited for
-    for f in glob.glob(f"{cache}/fenics/libffcx_forms_*.c.cached"):
+    # a compilation killed outright leaves NAME.c without NAME.c.cached (and the lock file of a dead
+    # process): the run removes and recompiles them; ffcx would wait 10 s for them, then fail
+    markers = glob.glob(f"{cache}/fenics/libffcx_forms_*.c.cached")
+    for f in markers:
         os.unlink(f)
-    t0 = time.time()
     p = rodfem("run", *RU, "--out", out, timeout=120, env=xdg)
-    assert p.returncode == 0 and time.time() - t0 < 9, p.stderr[-3000:]  # ffcx would wait 10 s, then fail
-    assert not stale(cache)
+    assert p.returncode == 0 and "waiting" not in p.stderr, p.stderr[-3000:]
+    assert not stale(cache) and all(os.path.exists(f) for f in markers)   # compiled afresh
+    # the next run reuses every compiled module: none is written again, no file is added
+    modules = {f: os.stat(f).st_mtime_ns for f in glob.glob(f"{cache}/fenics/*")}
+    assert rodfem("run", *RU, "--out", out, timeout=120, env=xdg).returncode == 0
+    assert {f: os.stat(f).st_mtime_ns for f in glob.glob(f"{cache}/fenics/*")} == modules
     # a damaged module: one line with the remedy
     for so in glob.glob(f"{cache}/fenics/libffcx_forms_*.so"):
         os.truncate(so, 100)
@@ -272,6 +330,50 @@ def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):
     # a cache that cannot be created
     p = rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": os.path.join(out, "summary.json")})
     assert p.returncode == 2 and "set XDG_CACHE_HOME to a writable directory" in one_line(p.stderr)
+
+
+def holding_the_lock(cache):
+    """Hold CACHE/fenics/rodfem-jit.lock as a compiling run would (its pid written in); the open file."""
+    os.makedirs(cache / "fenics", exist_ok=True)
+    lock = open(cache / "fenics" / "rodfem-jit.lock", "w")
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
+    return lock
+
+
+def test_a_held_jit_cache_lock(tmp_path):
+    """Another process holds the cache lock (a run compiling, stopped or stuck): a run with nothing to
+    compile does not wait; one that must compile says who holds it, stops on a signal, and gives up
+    after RODFEM_JIT_LOCK_TIMEOUT seconds in one line (it waited for ever, silently, deaf to signals)."""
+    warm, cold, out = tmp_path / "warm", tmp_path / "cold", str(tmp_path / "out")
+    assert rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": str(warm)}).returncode == 0
+    with holding_the_lock(warm), holding_the_lock(cold):
+        p = rodfem("run", *RU, "--out", out, timeout=60, env={"XDG_CACHE_HOME": str(warm)})
+        assert p.returncode == 0 and "waiting" not in p.stderr, p.stderr[-3000:]   # all compiled: no lock needed
+        lock = cold / "fenics" / "rodfem-jit.lock"
+        p = rodfem("run", *RU, "--out", out, timeout=60,
+                   env={"XDG_CACHE_HOME": str(cold), "RODFEM_JIT_LOCK_TIMEOUT": "1"})
+        assert p.returncode == 2, p.stderr[-3000:]
+        waiting, error = p.stderr.strip().splitlines()
+        assert waiting.startswith(f"rodfem: waiting for the JIT cache lock {lock}, held by pid {os.getpid()}")
+        assert error.startswith(f"rodfem: error: the JIT cache lock {lock} is still held by pid {os.getpid()} "
+                                "after 1 s") and "RODFEM_JIT_LOCK_TIMEOUT" in error
+        assert summary(out)["status"] == "error"
+        p = rodfem("run", *RU, "--out", out, timeout=60, env={"XDG_CACHE_HOME": str(cold),
+                                                             "RODFEM_JIT_LOCK_TIMEOUT": "soon"})
+        assert one_line(p.stderr) == "rodfem: error: RODFEM_JIT_LOCK_TIMEOUT must be a number of seconds >= 0 " \
+                                     "(got 'soon')"
+        p = subprocess.Popen(command("run", *RU, "--out", out), stderr=subprocess.PIPE, text=True, cwd=REPO,
+                             env=environment(XDG_CACHE_HOME=str(cold)))
+        assert p.stderr.readline().startswith("rodfem: waiting for the JIT cache lock")
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 143
+        one_line(err, "rodfem: interrupted by SIGTERM while waiting for the JIT cache lock")
+        assert summary(out)["status"] == "interrupted"
+        assert not [f for f in os.listdir(cold / "fenics") if f.startswith("libffcx")]   # it compiled nothing
+    assert rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": str(cold)}).returncode == 0
 
 
 # -- under mpirun -n 2: the ranks agree, none is left waiting ----------------------
@@ -305,6 +407,17 @@ def children(pid):
         if int(fields[1]) == pid:
             found.append(int(stat.split("/")[2]))
     return found
+
+
+@pytest.mark.mpi
+def test_mpi_a_held_jit_cache_lock(tmp_path):
+    """Rank 0 gives up waiting for the cache lock; both ranks end with its one line."""
+    cache = tmp_path / "cache"
+    with holding_the_lock(cache):
+        p = rodfem("run", *RU, "--out", tmp_path / "o", np=2, timeout=120,
+                   env={"XDG_CACHE_HOME": str(cache), "RODFEM_JIT_LOCK_TIMEOUT": "1"})
+    assert p.returncode == 2, p.stderr[-3000:]   # 124: timeout, a rank was left waiting
+    assert p.stderr.strip().splitlines()[-1].startswith("rodfem: error: the JIT cache lock")
 
 
 @pytest.mark.mpi

@@ -116,5 +116,84 @@ def test_bad_resume_input(capsys, tmp_path):
     one_line_error(["run", "--resume", good], "unreadable")
 
 
+FS = ["flying-spaghetti-2d", "--set", "n_elements=4", "--set", "checkpoint_every=2", "--quiet"]
+
+
+def finished(path, *sets):
+    """A finished run of FS to t = 0.5 (5 steps, checkpoint at step 4) in `path`; (summary.json, history.csv) texts."""
+    assert main(["run", *FS, "--set", "t_end=0.5", *sets, "--out", str(path)]) == 0
+    return record(path)
+
+
+def record(path):
+    return tuple((path / name).read_text() for name in ("summary.json", "history.csv"))
+
+
+def swap_arrays(path, other):
+    """The checkpoint in `path` with its own meta but the fields of the checkpoint in `other`."""
+    with np.load(path / "checkpoint.npz") as z, np.load(other / "checkpoint.npz") as w:
+        data = {k: w[k] for k in w.files}
+        data["meta"] = z["meta"]
+    with open(path / "checkpoint.npz", "wb") as f:
+        np.savez(f, **data)
+
+
+@pytest.mark.parametrize("case", ["t_end-before-the-checkpoint", "wrong-shape"])
+def test_a_refused_resume_keeps_the_record(case, capsys, tmp_path):
+    """A --resume refused for its t_end or a checkpoint that does not fit the mesh leaves the finished
+    run's summary.json and history.csv as they were (summary.json said "running", with the rejected
+    t_end and the pid of the refused process)."""
+    run = tmp_path / "run"
+    kept = finished(run)
+    if case == "wrong-shape":
+        finished(tmp_path / "other", "--set", "n_elements=6")
+        swap_arrays(run, tmp_path / "other")
+    capsys.readouterr()
+    assert main(["run", "--resume", str(run), *(["--set", "t_end=0.1"] if case != "wrong-shape" else [])]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and ("is before the checkpoint's time" in lines[0] or "does not fit" in lines[0]), lines
+    assert record(run) == kept
+
+
+@pytest.mark.parametrize("other", ["another-scene", "another-run-of-the-scene"])
+def test_a_checkpoint_copied_from_another_run_is_refused(other, capsys, tmp_path):
+    """A checkpoint copied in from another run (another scene, or the same scene with other parameters)
+    is refused in one line instead of resuming it on top of this directory's history."""
+    run, source = tmp_path / "run", tmp_path / "source"
+    kept = finished(run)
+    if other == "another-scene":
+        assert main(["run", "roll-up-2d", "--set", "n_elements=4", "--set", "t_end=0.5", "--set", "dt=0.1",
+                     "--set", "checkpoint_every=2", "--quiet", "--out", str(source)]) == 0
+    else:
+        finished(source, "--set", "EA=5000")
+    shutil.copy(source / "checkpoint.npz", run / "checkpoint.npz")
+    capsys.readouterr()
+    assert main(["run", "--resume", str(run), "--set", "t_end=1"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "copied from another run?" in lines[0], lines
+    assert ("scene roll-up-2d" if other == "another-scene" else "EA = 5000.0") in lines[0]
+    assert record(run) == kept
+    # without summary.json, history.csv tells: its row at the checkpoint's step is not the checkpoint's state
+    os.unlink(run / "summary.json")
+    assert main(["run", "--resume", str(run), "--set", "t_end=1"]) == 2
+    assert "is not of the run in" in capsys.readouterr().err
+    assert (run / "history.csv").read_text() == kept[1]
+
+
+@pytest.mark.mpi
+def test_mpi_a_refused_resume_keeps_the_record(rodfem, tmp_path):
+    run = tmp_path / "run"
+    ok(rodfem("run", *FS, "--set", "t_end=0.5", "--out", run, np=2, timeout=300))
+    kept = record(run)
+    p = rodfem("run", "--resume", run, "--set", "t_end=0.1", "--quiet", np=2, timeout=300)
+    assert p.returncode == 2 and "is before the checkpoint's time" in p.stderr, p.stderr[-3000:]
+    other = tmp_path / "other"
+    ok(rodfem("run", *FS, "--set", "t_end=0.5", "--set", "n_elements=6", "--out", other, np=2, timeout=300))
+    swap_arrays(run, other)
+    p = rodfem("run", "--resume", run, "--quiet", np=2, timeout=300)
+    assert p.returncode == 2 and "does not fit" in p.stderr, p.stderr[-3000:]   # 124: a rank left waiting
+    assert record(run) == kept
+
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__]))
