@@ -46,7 +46,10 @@ from rodfem.io.vtk import write_pvd, write_vtp
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
              "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
-             "checkpoint.npz", "checkpoint.npz.tmp*")
+             "checkpoint.npz", "checkpoint.npz.tmp*",
+             # the analyses' files (rodfem static / linearize / modes): a later run of any command clears them
+             "loadsteps.csv", "modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "linear.mat", "linear.json",
+             "states.csv", *(f"{k}.npz" for k in ("E", "J", "R", "Q", "B", "C", "A", "Hess", "E_modes", "A_modes")))
 LOCK_FILE = ".rodfem.lock"
 
 

@@ -274,7 +274,8 @@ def test_cli_refuses_a_model_without_modes(tmp_path, rodfem, solver):
     out = tmp_path / "sc"
     line = one_error_line(rodfem("modes", "slider-crank-3d", "--about", "initial", "--solver", solver, "--out", out))
     assert "no oscillating mode" in line and "2 finite eigenvalues: 2 real" in line
-    assert not out.exists()
+    assert not list(out.glob("mode*"))                      # no modes written; the record says why
+    assert json.loads((out / "summary.json").read_text())["status"] == "error"
 
 
 def test_cli_slepc_modes_of_the_relaxation_cluster(tmp_path, rodfem):
@@ -291,7 +292,8 @@ def test_cli_slepc_modes_of_the_relaxation_cluster(tmp_path, rodfem):
     assert np.allclose(info["omega_rad_s"], omega, rtol=1e-8, atol=0)
     assert np.allclose(info["damping_ratio"], lin.damping, rtol=0, atol=1e-8)
     named = p.stdout.strip().splitlines()[-1].split(": ", 1)[1].split(", ")
-    assert named == info["files"] == ["modes.csv", "modes.json", "modes.png", "mode_shapes.npz"]
+    assert named == ["modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "summary.json"]
+    assert info["files"] == named[:4]        # (modes.json is written before the summary)
     assert all((out / f).stat().st_size > 0 for f in named)
 
 

@@ -30,3 +30,20 @@ def test_a_system_that_cannot_be_built_records_its_error(tmp_path):
         run_scene(scene, out=str(tmp_path))
     s = summary(tmp_path)
     assert s["status"] == "error" and "independent" in s["failure"]["message"]
+
+
+def test_a_later_command_clears_the_files_of_an_earlier_one(tmp_path):
+    """`rodfem modes` then `rodfem run` into one directory: the run leaves no modes.* or linear.*
+    behind (they were never cleared), and `linearize` then `static` no matrices either."""
+    from rodfem.app.cli import main
+    out = str(tmp_path)
+    small = ["--set", "n_elements=4"]
+    assert main(["modes", "cantilever-2d", *small, "--out", out]) == 0
+    assert (tmp_path / "modes.csv").exists()
+    assert main(["run", "cantilever-2d", *small, "--set", "t_end=0.02", "--quiet", "--out", out]) == 0
+    assert not list(tmp_path.glob("mode*"))
+    assert main(["linearize", "cantilever-2d", *small, "--out", out]) == 0
+    assert (tmp_path / "E.npz").exists() and (tmp_path / "linear.json").exists()
+    assert main(["static", "cantilever-2d", *small, "--out", out]) == 0
+    assert not list(tmp_path.glob("*.npz")) or [f.name for f in tmp_path.glob("*.npz")] == ["checkpoint.npz"]
+    assert not (tmp_path / "linear.json").exists() and (tmp_path / "loadsteps.csv").exists()
