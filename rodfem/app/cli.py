@@ -122,6 +122,8 @@ def cmd_static(args):
     say(f"{summary['scene']}: static equilibrium at t = {summary['t']:g} in {summary['load_steps']} load steps "
         f"({summary['load_steps_halved']} halved), {summary['newton_its']} Newton iterations, "
         f"{summary['wall_time_s']:.2f} s{err}")
+    if summary.get("warning"):
+        say(f"warning: {summary['warning']}")
     say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png, checkpoint.npz "
         f"(a dynamic run from this equilibrium: rodfem run --resume {out} --out NEWDIR)")
 

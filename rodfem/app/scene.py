@@ -117,6 +117,7 @@ class Scene:
     parameters: list
     build: Callable                      # build(p: dict, comm) -> Problem
     reference: Optional[Callable] = None  # reference(p) -> dict of exact values (for studies)
+    reference_is_static: bool = True      # the reference is an equilibrium (`rodfem static` compares with it)
     notes: str = ""
     _index: dict = field(default=None, init=False, repr=False)
 

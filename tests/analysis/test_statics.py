@@ -169,3 +169,17 @@ def test_a_driven_joint_holds_its_drive_in_statics(angle, force):
     tip = np.array([obs["tip_x"], obs["tip_y"]])
     scale = force * (L**3 / (3 * EI) + L / GA)               # the deflection under the whole force
     assert np.max(np.abs(tip - expected)) <= (1e-3 * scale if force else 1e-12), (tip, expected)
+
+
+def test_a_static_result_far_from_the_exact_solution_is_flagged(tmp_path, capsys):
+    """roll-up-2d with 1e6 turns on 10 elements: 'completed', but 138 % of the scale away from the
+    exact circle, which the summary and the terminal now say (it was a plain exit 0); the default
+    roll-up (2.7e-13) is not flagged, and the slider crank's reference (its exact motion at t_end,
+    not an equilibrium) is not compared with."""
+    assert main(["static", "roll-up-2d", "--set", "turns=1e6", "--out", str(tmp_path / "a")]) == 0
+    s = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert s["error_relative"] > 1.0 and "refine it" in s["warning"]
+    assert "warning: the equilibrium is 1.38 of the scale away" in capsys.readouterr().out
+    assert main(["static", "roll-up-2d", "--out", str(tmp_path / "b")]) == 0
+    assert "warning" not in json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert load("slider-crank-3d").reference_is_static is False
