@@ -27,6 +27,7 @@ RODFEM_JIT_LOCK_TIMEOUT seconds (default 600) with an InputError (exit 2).
 Errors of the cache itself (a directory that cannot be created or written, a
 damaged module) become one InputError naming the directory and the remedy.
 """
+import errno
 import fcntl
 import functools
 import inspect
@@ -57,6 +58,9 @@ def stale_sources(cache_dir):
     return [os.path.join(cache_dir, n) for n in sources + markers]
 
 
+FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)   # a full disk, a quota, a file size limit
+
+
 def _unusable(cache_dir, e):
     return InputError(f"the JIT cache {cache_dir} cannot be used ({e.strerror or e}: {e.filename or cache_dir}); "
                       f"set XDG_CACHE_HOME to a writable directory (the cache is $XDG_CACHE_HOME/fenics)")
@@ -75,6 +79,9 @@ def _about_cache(e, cache_dir):
 
 def _converted(e, cache_dir):
     """The InputError for an error of the cache (None for any other error)."""
+    if isinstance(e, OSError) and e.errno in FULL:   # the compiler's files do not fit (cffi names no file)
+        return InputError(f"the JIT cache {cache_dir} cannot be written ({e.strerror}): free some space there "
+                          f"or set XDG_CACHE_HOME to a directory with room (the cache is $XDG_CACHE_HOME/fenics)")
     if not _about_cache(e, cache_dir):
         return None
     if isinstance(e, OSError) and not isinstance(e, TimeoutError):

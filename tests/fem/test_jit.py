@@ -15,3 +15,26 @@ def test_material_values_are_constants_not_compiled_in(rodfem, tmp_path):
     first = run_with(1e6, 1.0)
     assert first  # the first run compiled its forms into the cache
     assert run_with(3e6, 2.0) == first
+
+
+def test_a_full_disk_under_the_jit_cache_is_one_line(tmp_path):
+    """Files limited to 20 kB while the forms compile into an empty cache (as on a full disk): exit 2,
+    one line naming the cache, summary.json 'error' (it was a 65-line traceback from cffi, exit 1,
+    the summary left at 'running')."""
+    import json
+    import subprocess
+    import sys
+
+    from processes import environment
+    out = tmp_path / "out"
+    args = ["run", "roll-up-2d", "--set", "n_elements=4", "--set", "t_end=0.05", "--set", "dt=0.01", "--quiet",
+            "--out", str(out)]
+    code = ("import resource, sys\nfrom rodfem.app.cli import main\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (20000, 20000))\n"
+            f"sys.exit(main({args!r}))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                       env=environment(XDG_CACHE_HOME=str(tmp_path / "cache")))
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(lines) == 1, p.stderr[-2000:]
+    assert lines[0].startswith(f"rodfem: error: the JIT cache {tmp_path / 'cache' / 'fenics'} cannot be written (File too large)")
+    assert json.loads((out / "summary.json").read_text())["status"] == "error"
