@@ -8,17 +8,17 @@ before the eigenvalue solve), "error".  Input is checked before the directory is
 """
 import os
 import time
-from contextlib import contextmanager, nullcontext, suppress
+from contextlib import contextmanager, nullcontext
 
 import numpy as np
 from mpi4py import MPI
 
 from rodfem.analysis.linearize import Linearization, mode_shapes, natural_modes, plot_modes
 from rodfem.analysis.statics import StaticFailure, Statics
-from rodfem.app.driver import STOPS, build, stopped
+from rodfem.app.driver import build, record, stop_of, stopped
 from rodfem.common import interrupts
 from rodfem.common.limits import check_load_steps
-from rodfem.errors import InputError, Interrupted, ParameterError
+from rodfem.errors import ParameterError
 from rodfem.io.output import OutDir, write_json
 
 
@@ -43,20 +43,18 @@ def owned(out, started, comm, subdir=None):
         try:
             yield outdir
         except Exception as error:
-            stop = error
-            if interrupts.received() and not isinstance(error, STOPS):
-                stop = Interrupted(interrupts.received(), where="while building the scene")
-            elif not isinstance(error, STOPS):
+            stop = stop_of(error, where="while building the scene")
+            if stop is None:
                 raise
-            if outdir:
-                status, failure = (("static-failure", str(stop)) if isinstance(stop, StaticFailure)
-                                   else stopped(stop))
-                with suppress(InputError):
-                    outdir.do("write summary.json", write_json, outdir.file("summary.json"),
-                              dict(started, status=status, failure=failure))
+            record(outdir, started, stop, analysis_status)
             if stop is error:
                 raise
             raise stop from None
+
+
+def analysis_status(stop):
+    """(status, failure) of summary.json: a static failure by name, else as for a run."""
+    return ("static-failure", str(stop)) if isinstance(stop, StaticFailure) else stopped(stop)
 
 
 def heading(scene, p, mode, comm, **extra):

@@ -118,24 +118,36 @@ def build(scene, p, comm, outdir=None, started=None):
     try:
         return scene.build(p, comm).build()
     except Exception as error:
-        if isinstance(error, Interrupted):
-            stop = error
-        elif interrupts.received():  # whatever the compiler's death looked like
-            stop = Interrupted(interrupts.received())
-        elif isinstance(error, MemoryError):
-            stop = out_of_memory(error)
-        elif isinstance(error, STOPS):
-            stop = error
-        else:
+        stop = stop_of(error)
+        if stop is None:
             raise
-        if outdir:
-            status, failure = stopped(stop)
-            with suppress(InputError):
-                outdir.do("write summary.json", write_json, outdir.file("summary.json"),
-                          dict(started, status=status, failure=failure))
+        record(outdir, started, stop)
         if stop is error:
             raise
         raise stop from None
+
+
+def stop_of(error, where=None):
+    """The exception that ends a run for `error`: the interrupt when a signal came (whatever the
+    death of a compiler it killed looked like), one line for a MemoryError, the error itself if it
+    is one of STOPS; None for anything else (a bug: let it through)."""
+    if isinstance(error, Interrupted):
+        return error
+    if interrupts.received():
+        return Interrupted(interrupts.received(), where=where)
+    if isinstance(error, MemoryError):
+        return out_of_memory(error)
+    return error if isinstance(error, STOPS) else None
+
+
+def record(outdir, started, stop, status=None):
+    """summary.json of the run in `outdir` (if any): `started` with how `stop` ended it
+    (status(stop) -> (status, failure); default `stopped`); a write that fails is let go."""
+    if outdir:
+        state, failure = (status or stopped)(stop)
+        with suppress(InputError):
+            outdir.do("write summary.json", write_json, outdir.file("summary.json"),
+                      dict(started, status=state, failure=failure))
 
 
 def stopped(stop):
