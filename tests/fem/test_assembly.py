@@ -5,17 +5,7 @@ gives DOLFINx's block matrix; the linear-time collapse of a field is DOLFINx's."
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
-
-from rodfem import run
-from rodfem.app.scene import load
-
-
-def built(scene, n, steps=1):
-    s = load(scene)
-    p = s.values({"n_elements": n})
-    problem = s.build(p, MPI.COMM_WORLD)
-    run(problem, p["dt"], steps * p["dt"])
-    return problem
+from scenes import built
 
 
 def test_fast_assembly_is_dolfinx_assembly():

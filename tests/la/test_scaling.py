@@ -15,18 +15,11 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 from processes import assert_same_history, history, rodfem, serial_and_parallel, summary
+from scenes import built
 
 from rodfem import run
 from rodfem.app.scene import load
 from rodfem.la.schur import InterfaceSchur, interface
-
-
-def built(scene, n, steps=2):
-    s = load(scene)
-    p = s.values({"n_elements": n})
-    problem = s.build(p, MPI.COMM_WORLD)
-    run(problem, p["dt"], steps * p["dt"])
-    return problem
 
 
 def relative_residual(A, solve, b):
