@@ -292,6 +292,14 @@ MUTATIONS = [
         "def _destroy_solvers")],
       ["tests/core/test_system.py::test_two_point_masses_under_a_domain_load_follow_the_closed_form"],
       "a script's parallel solver left to PETSc's finalization (SEGV at exit under mpirun)"),
+    M("point-mass-2d-angular-momentum-sign", "forms/rigid_body.py",
+      [('out["L_z"] = x["x"][0] * p[1] - x["x"][1] * p[0]', 'out["L_z"] = x["x"][1] * p[0] - x["x"][0] * p[1]')],
+      ["tests/core/test_system.py::test_two_point_masses_under_a_domain_load_follow_the_closed_form"],
+      "the 2D point mass's angular momentum with its sign flipped (a read-out: the balance does not see it)"),
+    M("rigid-3d-principal-axes-swapped", "forms/rigid_body.py",
+      [("        self.E = director_masses(J)\n", "        self.E = director_masses(J[::-1])\n")],
+      ["tests/models/test_rigid_bodies.py::test_free_symmetric_top_precesses_at_eulers_rate"],
+      "the 3D rigid body's inertia about d1 and d3 swapped (energy-consistent, a wrong precession)"),
 ]
 
 
