@@ -300,6 +300,11 @@ MUTATIONS = [
       [("        self.E = director_masses(J)\n", "        self.E = director_masses(J[::-1])\n")],
       ["tests/models/test_rigid_bodies.py::test_free_symmetric_top_precesses_at_eulers_rate"],
       "the 3D rigid body's inertia about d1 and d3 swapped (energy-consistent, a wrong precession)"),
+    M("schur-column-stage-sign", "rodfem/la/schur.py",
+      [("y = y - self.Z @ xG[self.ZG]", "y = y + self.Z @ xG[self.ZG]")],
+      ["tests/la/test_scaling.py::test_mpi_every_interior_solver_gives_the_serial_history"],
+      "the parallel solver's SuperLU/MUMPS interior stages add the interface's correction (only the default "
+      "stage ran under mpirun)"),
 ]
 
 
