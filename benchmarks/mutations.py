@@ -305,6 +305,10 @@ MUTATIONS = [
       ["tests/la/test_scaling.py::test_mpi_every_interior_solver_gives_the_serial_history"],
       "the parallel solver's SuperLU/MUMPS interior stages add the interface's correction (only the default "
       "stage ran under mpirun)"),
+    M("rod-branch-first-compliance-only", "forms/cosserat_rod.py",
+      [("        parts[name] = c\n", "        parts[name] = np.full(3, c[0])\n")],
+      ["tests/models/test_viscoelastic.py::test_anisotropic_rod_branch_creeps_per_component"],
+      "a 3D Maxwell branch built from its first compliance only (isotropic tests cannot see it)"),
 ]
 
 
