@@ -309,6 +309,14 @@ MUTATIONS = [
       [("        parts[name] = c\n", "        parts[name] = np.full(3, c[0])\n")],
       ["tests/models/test_viscoelastic.py::test_anisotropic_rod_branch_creeps_per_component"],
       "a 3D Maxwell branch built from its first compliance only (isotropic tests cannot see it)"),
+    M("section-start-cap-inward", "rodfem/io/sections.py",
+      [("polys = [np.arange(m)[::-1]] + polys", "polys = [np.arange(m)] + polys")],
+      ["tests/io/test_output.py::test_section_caps_face_outwards_and_carry_their_end_values"],
+      "the section surface's start cap wound the other way (its normal facing into the rod)"),
+    M("section-caps-swapped", "rodfem/io/frames.py",
+      [("order = np.concatenate([[seg[0]], order, [seg[-1]]])", "order = np.concatenate([[seg[-1]], order, [seg[0]]])")],
+      ["tests/io/test_output.py::test_section_caps_face_outwards_and_carry_their_end_values"],
+      "each cap of the section surface carries the other end's values"),
 ]
 
 

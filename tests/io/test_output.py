@@ -306,3 +306,39 @@ def test_planar_stress_resultants_include_the_maxwell_branches(tmp_path):
     assert np.max(np.abs(G1)) > 1e-4 and np.max(np.abs(k1)) > 1e-3     # the branch carries stress
     assert np.allclose(N, G * [100.0, 50.0] + G1 * [30.0, 20.0], rtol=1e-12, atol=1e-14)
     assert np.allclose(M, 2.0 * k + 0.5 * k1, rtol=1e-12, atol=1e-14)
+
+
+def newell_normal(points):
+    """The area-weighted normal of a planar polygon (its vertices in order): Newell's formula."""
+    p, q = points, np.roll(points, -1, axis=0)
+    return 0.5 * np.array([np.sum((p[:, 1] - q[:, 1]) * (p[:, 2] + q[:, 2])),
+                           np.sum((p[:, 2] - q[:, 2]) * (p[:, 0] + q[:, 0])),
+                           np.sum((p[:, 0] - q[:, 0]) * (p[:, 1] + q[:, 1]))])
+
+
+def test_section_caps_face_outwards_and_carry_their_end_values(tmp_path):
+    """A beam's surface: the cap at s = 0 faces -d1(0), the cap at s = L faces +d1(L) (their
+    normals by Newell's formula from the vertex order, area w * w/2), and each cap carries its own end
+    element's Gamma, kappa (on a section turned by phi = 0.3 s^2 along a straight line they differ
+    from element to element)."""
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic
+    beam = PlanarBeam(1.0, 0.1, quadratic(EA=100.0, GA=50.0, EI=2.0))
+    # a straight centreline with the section turned by phi = 0.3 s^2: Gamma and kappa = 0.6 s vary along s
+    problem = Problem(beam, L_ARC, N_ARC, initial={"r": lambda x: np.vstack([x[0], 0 * x[0]]),
+                                                   "phi": lambda x: 0.3 * x[0] ** 2}, comm=COMM)
+    write_run(problem, tmp_path, 0.01, 0.02, frames=2, section=0.1)
+    c = read_vtp(tmp_path / "centreline" / "frame_00000.vtp")
+    surf = read_vtp(tmp_path / "surface" / "frame_00000.vtp")
+    phi = c.point_data["phi"].values
+    d1 = np.column_stack([np.cos(phi), np.sin(phi), 0 * phi])
+    polys = [np.asarray(p) for p in surf.polys]
+    assert len(polys) == 4 * N_ARC + 2
+    for cap, node, sign in ((polys[0], 0, -1.0), (polys[-1], -1, 1.0)):
+        n = newell_normal(surf.points[cap])
+        assert np.linalg.norm(n) == pytest.approx(0.1 * 0.05, rel=1e-12)
+        assert sign * n @ d1[node] / np.linalg.norm(n) >= 1 - 1e-12
+    for name in ("Gamma", "kappa"):
+        values = surf.cell_data[name].values
+        sides = values[1:-1:4]
+        assert np.ptp(sides, axis=0).max() > 0.1                  # the element values differ along s
+        assert np.array_equal(values[0], sides[0]) and np.array_equal(values[-1], sides[-1])
