@@ -58,8 +58,8 @@ class Solve:
 
 
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
-_LIVE = weakref.WeakSet()
-_COUNTER = itertools.count()   # the Newtons alive: their SNES are destroyed before PETSc finalizes
+_LIVE = weakref.WeakSet()      # the Newtons alive: their SNES are destroyed before PETSc finalizes
+_COUNTER = itertools.count()   # (rodfem/la/schur.py's _clean_up frees the ones Python has dropped)
 
 
 @atexit.register   # registered after petsc4py's finalization, so it runs before it
