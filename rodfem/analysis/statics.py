@@ -287,10 +287,12 @@ def solve(target, t: float = 0.0, steps: int = 1, adaptive: bool = True, options
 
 class StaticJointRows(JointRows):
     """The joints at rest: the reactions G(q)^T lambda on the momentum rows and the position-level
-    rows g(q) - mu g_p(t) (the load factor mu scales a driven joint's motion)."""
+    rows g(q) - mu g_p(t) (the load factor mu scales a driven joint's motion); the springs'
+    forces G(q)^T psi'(xi(q)) (dampers exert none at rest)."""
     mu, t = 1.0, 0.0
 
     PAIRS = (("v", "q"), ("v", "lam"), ("lam", "q"))
+    COMPONENT_PAIRS = (("v", "q"),)
 
     def update(self, X):
         vals = self.points.values(X)
@@ -301,4 +303,7 @@ class StaticJointRows(JointRows):
                 G = np.einsum("kij,j->ki", j.Q, q) + j.c
                 g = 0.5 * np.einsum("i,kij,j->k", q, j.Q, q) + j.c @ q + j.e - self.mu * j.prescribed(self.t)
                 blocks = (("v", "q", np.einsum("k,kij->ij", lam, j.Q)), ("v", "lam", G.T), ("lam", "q", G))
-                self._terms.append((j, G.T @ lam, g, blocks, 0.0))
+                self._terms.append((j, G.T @ lam, g, blocks, 0.0, 0.0))
+            for c in self.components:   # springs at rest: G(q)^T psi'(xi(q)); dampers: nothing
+                r_v, dr_dq = c.at_rest(vals[c.q_at])
+                self._terms.append((c, r_v, np.zeros(0), (("v", "q", dr_dq),), 0.0, 0.0))

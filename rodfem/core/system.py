@@ -30,6 +30,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem.core.body import Body
+from rodfem.core.components import Law
 from rodfem.core.joints import Frame, Joint, Point
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
@@ -81,7 +82,7 @@ class System:
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
-        self.bodies, self.joints, self.markers, self.recorders = {}, [], {}, []
+        self.bodies, self.joints, self.components, self.markers, self.recorders = {}, [], [], {}, []
         self._ready = False
 
     # -- the sketch -------------------------------------------------------------
@@ -109,21 +110,38 @@ class System:
     def join(self, constraint: Callable, a: Point, b: Point, name: str = "", drive: Optional[Callable] = None) -> Joint:
         """Join point a to point b (or GROUND) by the joint `constraint` of rodfem/forms/joints.py;
         `drive(t)` (zero at t = 0) prescribes its motion: g(q) = drive(t)."""
-        if self._ready:
-            raise ConstraintError(f"joint {name or constraint}: the system has been built (it has run); "
-                                  "join every point before the first run")
-        for p in (a, b):
-            if not isinstance(p, Point):
-                raise ConstraintError(f"joint {name or constraint}: {p!r} is not a point (use body.start, .end, .point())")
-            if p.body is not None and self.bodies.get(p.body.name) is not p.body:
-                raise ConstraintError(f"joint {name or constraint}: body {p.body.name} is not in this system")
-        if a.body is None and b.body is None:
-            raise ConstraintError("a joint needs at least one body")
+        self._check_points(f"joint {name or constraint}", a, b)
         joint = Joint(constraint, a, b, name or f"{getattr(constraint, '__name__', 'joint')}{len(self.joints) + 1}", drive)
-        if any(j.name == joint.name for j in self.joints):
-            raise ConstraintError(f"joint name {joint.name!r} is used twice")
+        self._check_name(joint.name)
         self.joints.append(joint)
         return joint
+
+    def connect(self, law: Law, a: Point, b: Point, name: str = ""):
+        """Place a component of rodfem/forms/components.py (a spring, a damper) between point a and
+        point b (or the ground): its energy joins H, its dissipation the `dissipated` column."""
+        if not isinstance(law, Law):
+            raise ConstraintError(f"component {name or law!r} is not a spring or damper of rodfem.forms.components")
+        self._check_points(f"component {name or law.label}", a, b)
+        component = law.between(a, b, name or f"{law.label.replace(' ', '_')}{len(self.components) + 1}")
+        self._check_name(component.name)
+        self.components.append(component)
+        return component
+
+    def _check_points(self, what, a, b):
+        if self._ready:
+            raise ConstraintError(f"{what}: the system has been built (it has run); "
+                                  "join and connect every point before the first run")
+        for p in (a, b):
+            if not isinstance(p, Point):
+                raise ConstraintError(f"{what}: {p!r} is not a point (use body.start, .end, .point())")
+            if p.body is not None and self.bodies.get(p.body.name) is not p.body:
+                raise ConstraintError(f"{what}: body {p.body.name} is not in this system")
+        if a.body is None and b.body is None:
+            raise ConstraintError(f"{what} needs at least one body")
+
+    def _check_name(self, name):
+        if any(j.name == name for j in self.joints + self.components):
+            raise ConstraintError(f"joint or component name {name!r} is used twice")
 
     def marker(self, name: str, point: Point):
         """Record the position of `point` in the history as columns name_x, name_y (, name_z)."""
@@ -152,7 +170,7 @@ class System:
                 if not key.startswith("obs:") or self.single:
                     forms[(ref.name, key)] = f
         free = not any(r.body.supports for r in refs) and not any(
-            j.a.body is None or j.b.body is None for j in self.joints)
+            j.a.body is None or j.b.body is None for j in self.joints + self.components)
         if not self.single and (self.momentum or (self.momentum is None and free)):   # total momentum maps
             for ref in refs:
                 X1 = ref.body.space.split(ref.body.x1)
@@ -162,17 +180,19 @@ class System:
         for j in self.joints:
             j.offset = size
             size += self._bind(j)
+        for c in self.components:
+            self._bind_component(c)
         self.compiled = compile_forms(forms)
         self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
         self.columns = list(dict.fromkeys(self.columns))
         if not self.single:
             self.columns.sort(key=lambda c: ("pL".index(c[4]), c))
         self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
-        self.points = PointIndex(self, self.layout) if (self.joints or self.markers) else None
+        self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
                        for r in refs]
         self.assembler = BlockAssembler(self.layout, self.blocks,
-                                        JointRows(self.points) if self.joints else None)
+                                        JointRows(self.points) if (self.joints or self.components) else None)
         self.X1 = self.assembler.vector
         self.X0 = self.layout.create_vector()
         self._pull(self.X1, "x1")
@@ -192,7 +212,30 @@ class System:
 
     def _bind(self, joint):
         """Bind a joint to its points' frames and initial coordinates; returns its number of multipliers."""
-        points = (joint.a, joint.b)
+        sides, frames, q0s, scale = self._frames(joint)
+        joint.sides = sides
+        try:
+            joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
+        except ConstraintError:
+            raise
+        except (ValueError, TypeError, IndexError) as err:   # e.g. an offset on a point that has none
+            raise ConstraintError(f"joint {joint.name} ({joint.a.describe()} - {joint.b.describe()}): {err}") from None
+        return joint.size
+
+    def _bind_component(self, component):
+        """Bind a spring or damper to its points' frames and initial coordinates."""
+        sides, frames, q0s, scale = self._frames(component)
+        component.sides = sides
+        try:
+            component.bind(frames[0], frames[1], q0s[0], q0s[1], scale, self.integrator)
+        except ConstraintError:
+            raise
+        except (ValueError, TypeError, IndexError) as err:
+            raise ConstraintError(f"{component.describe()}: {err}") from None
+
+    def _frames(self, item):
+        """The coordinates of a joint's or component's two points: (sides, frame builders, q(0), scale)."""
+        points = (item.a, item.b)
         sides = [None if p.body is None else point_coordinates(p, self.comm) for p in points]
         frames, q0s, scale = [], [], 1.0
         for k, (p, side) in enumerate(zip(points, sides)):
@@ -207,14 +250,7 @@ class System:
                 frames.append(lambda q, s=side, mdl=model, off=offset: mdl.frame(s.unpack(q), off))
                 q0s.append(side.values(0))
                 scale = max(scale, float(np.max(np.abs(side.values(0)))))
-        joint.sides = sides
-        try:
-            joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
-        except ConstraintError:
-            raise
-        except (ValueError, TypeError, IndexError) as err:   # e.g. an offset on a point that has none
-            raise ConstraintError(f"joint {joint.name} ({joint.a.describe()} - {joint.b.describe()}): {err}") from None
-        return joint.size
+        return sides, frames, q0s, scale
 
     # -- the state: X <-> the bodies' Functions -----------------------------------
     def _pull(self, X, which):
@@ -292,9 +328,10 @@ class System:
         return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
 
     def hamiltonian(self) -> float:
-        """H(x_{n+1}) = sum of the bodies' H."""
+        """H(x_{n+1}) = sum of the bodies' H and of the components' stored energies."""
         self.build()
-        return self._sum("H")
+        stored = self.points.stored_energy(self.X1) if self.components else 0.0
+        return self._sum("H") + stored
 
     def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports and the driven joints."""
@@ -303,13 +340,14 @@ class System:
 
     @property
     def dissipates(self) -> bool:
-        """True if a body dissipates (rodfem/core/model.py: `dissipation`)."""
+        """True if a body (rodfem/core/model.py: `dissipation`) or a component (a damper) dissipates."""
         self.build()
-        return any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+        return (any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+                or any(c.dissipative for c in self.components))
 
     def dissipated_energy(self) -> float:
-        """h d_n of the last step: the sum over the dissipating bodies."""
-        return self._sum("dissipation")
+        """h d_n of the last step: the sum over the dissipating bodies and dampers."""
+        return self._sum("dissipation") + (self.assembler.coupling.dissipated if self.components else 0.0)
 
     def observe(self) -> dict:
         """The history's columns of the state x_{n+1}."""
@@ -367,8 +405,9 @@ class PointIndex:
             own = layout.sizes[i]
             g = np.array([[l2g[i][d] if 0 <= d < own else -1 for d in dofs] for dofs in (pc.q_dofs, pc.v_dofs)])
             return allreduce_max(self.comm, g)
+        self.components = system.components
         wanted = []
-        for j in self.joints:
+        for j in self.joints + self.components:
             q, v = [], []
             for side in j.sides:
                 if side is not None:
@@ -377,7 +416,7 @@ class PointIndex:
                     v.append(g[1])
             j.q_index = np.concatenate(q) if q else np.zeros(0, np.int64)
             j.v_index = np.concatenate(v) if v else np.zeros(0, np.int64)
-            j.lam_index = layout.multipliers[j.offset:j.offset + j.size]
+            j.lam_index = layout.multipliers[j.offset:j.offset + j.size] if j in self.joints else np.zeros(0, np.int64)
             wanted += [j.q_index, j.v_index, j.lam_index]
         self.marker_points = {}
         for name, p in system.markers.items():
@@ -400,7 +439,7 @@ class PointIndex:
         self.scatter = PETSc.Scatter().create(system.X1 if hasattr(system, "X1") else layout.create_vector(),
                                               is_from, self.gathered, None)
         position = {int(g): k for k, g in enumerate(self.wanted)}
-        for j in self.joints:   # positions of each joint's indices in the gathered values
+        for j in self.joints + self.components:   # positions of each joint's indices in the gathered values
             j.q_at, j.v_at, j.lam_at = ([position[int(g)] for g in idx] for idx in (j.q_index, j.v_index, j.lam_index))
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
@@ -415,6 +454,12 @@ class PointIndex:
     def step(self, X0, t0, t1, h):
         """The step from x_n (X0) at t0 to t1 = t0 + h."""
         self.x0_values, self.times = self.values(X0), (t0, t1, h)
+
+    def stored_energy(self, X) -> float:
+        """The components' stored energy sum V(q) at the state X (collective; the same on every rank)."""
+        vals = self.values(X)
+        V = sum(c.energy(vals[c.q_at]) for c in self.components if not c.dissipative) if self.comm.rank == 0 else 0.0
+        return self.comm.bcast(V, root=0)
 
     def check_independent(self, X0):
         """Refuse a redundant or inconsistent set of joints: the joints' velocity constraints
@@ -467,15 +512,18 @@ class PointIndex:
 
 
 class JointRows:
-    """The joints' terms of a time step (rodfem/fem/assembly.py's coupling): the reactions
-    G(q_{n+1/2})^T lambda on the momentum rows and the velocity-level constraint rows
-    (rodfem/core/joints.py, `Joint.step`), computed on rank 0 and added at global indices."""
+    """The joints' and components' terms of a time step (rodfem/fem/assembly.py's coupling): the
+    reactions G(q_{n+1/2})^T lambda on the momentum rows and the velocity-level constraint rows
+    (rodfem/core/joints.py, `Joint.step`), the springs' and dampers' forces on the momentum rows
+    (rodfem/core/components.py), computed on rank 0 and added at global indices."""
 
-    PAIRS = (("v", "q"), ("v", "lam"), ("lam", "q"), ("lam", "v"), ("lam", "lam"))   # blocks it can fill
+    PAIRS = (("v", "q"), ("v", "lam"), ("lam", "q"), ("lam", "v"), ("lam", "lam"))   # blocks a joint can fill
+    COMPONENT_PAIRS = (("v", "q"), ("v", "v"))                                         # and a component
 
     def __init__(self, points):
         self.points, self.joints, self.comm = points, points.joints, points.comm
-        self.work = 0.0
+        self.components = points.components
+        self.work = self.dissipated = 0.0
         self._terms = []
 
     def entries(self):
@@ -490,6 +538,11 @@ class JointRows:
             for r, c in ((kinds[a], kinds[b]) for a, b in self.PAIRS):
                 R, C = np.meshgrid(r, c, indexing="ij")
                 out.append((R.ravel(), C.ravel()))
+        for comp in self.components:
+            kinds = {"v": comp.v_index[comp.rows], "q": comp.q_index[comp.qcols]}
+            for r, c in ((kinds[a], kinds[b]) for a, b in self.COMPONENT_PAIRS):
+                R, C = np.meshgrid(r, c, indexing="ij")
+                out.append((R.ravel(), C.ravel()))
         return out
 
     def update(self, X):
@@ -500,7 +553,10 @@ class JointRows:
             v0 = self.points.x0_values
             t0, t1, h = self.points.times
             for j in self.joints:
-                self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1)))
+                self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1), 0.0))
+            for c in self.components:
+                r_v, dr_dq, dr_dv, lost = c.step(v0[c.q_at], vals[c.q_at], v0[c.v_at], vals[c.v_at], h)
+                self._terms.append((c, r_v, np.zeros(0), (("v", "q", dr_dq), ("v", "v", dr_dv)), 0.0, lost))
 
     def terms(self, j, v0, v1, h, t0, t1):
         """(r_v, r_lam, {(rows, cols): block}, work) of joint j."""
@@ -509,17 +565,19 @@ class JointRows:
         return r_v, r_lam, (("v", "q", drv_dq), ("v", "lam", drv_dl), ("lam", "q", drl_dq), ("lam", "v", drl_dv)), work
 
     def residual(self, X, b):
-        work = 0.0
-        for j, r_v, r_lam, _, w in self._terms:
+        work = lost = 0.0
+        for j, r_v, r_lam, _, w, d in self._terms:
             b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
                         addv=PETSc.InsertMode.ADD)
-            b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
+            if len(r_lam):
+                b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
             work += w
-        self.work = self.comm.bcast(work, root=0)
+            lost += d
+        self.work, self.dissipated = self.comm.bcast((work, lost), root=0)
 
     def jacobian(self, X, A):
-        for j, _, _, blocks, _ in self._terms:
-            index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(j.size)))}
+        for j, _, _, blocks, _, _ in self._terms:
+            index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(len(j.lam_index))))}
             for rk, ck, block in blocks:
                 (r_idx, r_sel), (c_idx, c_sel) = index[rk], index[ck]
                 if len(r_sel) and len(c_sel):

@@ -1,0 +1,96 @@
+"""Springs and dampers between two points: their measures, energies and damping laws.
+
+A component (rodfem/core/components.py) is a MEASURE xi(a, b, a0, b0) of two points' frames
+(`a.x` the position, `a.d` the directors, `a.phi` the angle; a0, b0 at t = 0), quadratic in
+their coordinates like a joint's g (forms/joints.py), with either
+
+* an energy psi(xi): a spring, V = psi(xi(q)); the discrete-gradient rule keeps
+  H_{n+1} - H_n + dissipated = supplied exact for any psi, the midpoint rule only for a psi
+  linear in xi (Kinon, Morandin, Schulze, arXiv 2505.18810, Sec. 4);
+* a damping coefficient eta >= 0: a damper, force eta G^T G v, dissipated power eta |xi'|^2.
+
+A spring's energy is written like a material (forms/string_materials.py): one function of the
+squared length c = |x_b - x_a|^2, so its force stays along the line between the points.
+A new spring law is a new function here; the engine needs nothing else.
+
+    system.connect(spring(quartic(k=50.0, rest_length=1.0)), p1.point(), p3.point())
+    system.connect(damper(1.0), p2.point(), p3.point())
+"""
+import numpy as np
+
+from rodfem.core.components import potential, resistance
+
+# -- measures (quadratic in the points' coordinates) -------------------------------------------
+
+def squared_length(a, b, a0, b0):
+    """c = |x_b - x_a|^2."""
+    d = b.x - a.x
+    return [d @ d]
+
+
+def separation(a, b, a0, b0):
+    """The relative position d = x_b - x_a (its rate: the relative velocity)."""
+    return b.x - a.x
+
+
+def relative_angle(a, b, a0, b0):
+    """theta = (phi_b - phi_a) - (phi_b - phi_a)(0) of planar points."""
+    return [(b.phi - a.phi) - (b0.phi - a0.phi)]
+
+
+def misalignment(a, b, a0, b0):
+    """mu = 3 - tr(C^T R_a^T R_b), C = R_a(0)^T R_b(0): 2 (1 - cos theta) for the rotation theta of b
+    relative to a since t = 0 (3D points with directors; about theta^2 for small angles)."""
+    C = a0.R.T @ b0.R
+    return [3.0 - sum(C[i, j] * (a.d[i] @ b.d[j]) for i in range(3) for j in range(3))]
+
+
+# -- energies of the squared length c ----------------------------------------------------------
+
+def quartic(k, rest_length):
+    """psi(c) = k/2 (c - l0^2)^2: the spring of Kinon, Morandin, Schulze's four-particle example
+    (small-stretch stiffness 4 k l0^2)."""
+    return lambda c: 0.5 * k * (c - rest_length**2) ** 2
+
+
+def hookean(k, rest_length):
+    """psi(c) = k/2 (sqrt(c) - l0)^2: the linear spring of stiffness k (non-polynomial in q)."""
+    return lambda c: 0.5 * k * (np.sqrt(c) - rest_length) ** 2
+
+
+def tension_only(k, rest_length):
+    """psi(c) = k/2 max(sqrt(c) - l0, 0)^2: a cable that pulls but does not push (C^1)."""
+    return lambda c: 0.5 * k * np.where(np.real(np.sqrt(c)) > rest_length, np.sqrt(c) - rest_length, 0.0) ** 2
+
+
+# -- components --------------------------------------------------------------------------------
+
+def spring(energy):
+    """A spring between the two points with the energy psi(c) of the squared length c."""
+    return potential(squared_length, energy, "spring")
+
+
+def rotational_spring(energy):
+    """A planar rotational spring with the energy psi(theta) of the relative angle."""
+    return potential(relative_angle, energy, "rotational spring")
+
+
+def torsional_spring(k):
+    """A 3D rotational spring V = k/2 (3 - tr(C^T R_a^T R_b)) = k (1 - cos theta) (about k theta^2 / 2)."""
+    return potential(misalignment, lambda mu: 0.5 * k * mu, "torsional spring")
+
+
+def damper(eta):
+    """A damper on the relative velocity, force eta (v_b - v_a); eta a number or a function
+    eta(a, b) of the points' frames at the step's midpoint."""
+    return resistance(separation, eta, "damper")
+
+
+def rotational_damper(eta):
+    """A planar rotational damper on the relative angular velocity."""
+    return resistance(relative_angle, eta, "rotational damper")
+
+
+def length_dependent(eta0, alpha):
+    """eta = eta0 (1 + alpha |x_b - x_a|^2) (the four-particle example's damper)."""
+    return lambda a, b: eta0 * (1.0 + alpha * float((b.x - a.x) @ (b.x - a.x)))

@@ -1,0 +1,270 @@
+"""Components: springs and dampers between two points, with their own energy and dissipation.
+
+A component ties a point of body a to a point of body b (or to the ground) like a joint
+(rodfem/core/joints.py), but through a stored energy or a resistance instead of a constraint.
+Both are written in forms/components.py with a MEASURE xi(a, b, a0, b0) of the two points'
+frames that is quadratic in their coordinates q (like a joint's g: the squared distance
+|x_b - x_a|^2, the relative position x_b - x_a, the relative angle phi_b - phi_a), so that
+
+    xi(q_{n+1}) - xi(q_n) = G(q_m) (q_{n+1} - q_n),   G = d xi / dq,  q_m = (q_n + q_{n+1})/2,
+
+exactly (the engine finds the quadratic form by polarization and refuses any other xi).
+
+* A `Potential` stores V(q) = psi(xi(q)) for ANY energy psi of the measure (Kinon, Morandin,
+  Schulze, "Discrete gradient methods for port-Hamiltonian differential-algebraic equations",
+  arXiv 2505.18810: E x' = (J - R) z + B u with z = grad H).  Its force on the momentum rows of
+  the two points is G(q_m)^T z with the co-energy
+
+      midpoint:           z = psi'(xi(q_m))
+      discrete gradient:  z = psi'(xi_m) + [psi(xi_1) - psi(xi_0) - psi'(xi_m).dxi] dxi / |dxi|^2,
+                          xi_m = (xi_0 + xi_1)/2, dxi = xi_1 - xi_0   (Gonzalez, J Nonlinear Sci 6 (1996))
+
+  so that, with the kinematic rows q_{n+1} - q_n = h v_m, the force does the work
+  z . dxi = psi(xi_1) - psi(xi_0) = V(q_{n+1}) - V(q_n) exactly under the discrete gradient for
+  any psi (and under the midpoint rule only when psi is linear in xi).  The discrete gradient is
+  taken in the measure, not in q: for a spring (xi = |d|^2) the force stays along d, so the
+  component carries no net force or moment and the momentum maps stay conserved.  Where
+  |dxi| <= 1e-3 |xi| the bracket (a cancellation) is replaced by its Taylor term
+  D^3 psi(xi_m)[dxi, dxi, dxi] / 24, as in rodfem/core/integrators.py.
+
+* A `Resistance` is a damper: the force eta G(q_m)^T G(q_m) v_m on the momentum rows, with a
+  coefficient eta(a_m, b_m) >= 0 that may depend on the midpoint configuration (R(x) of the
+  PH-DAE).  It dissipates h d_n = h eta |G(q_m) v_m|^2 >= 0 in the step (the `dissipated` column).
+
+The energy functions psi are plain functions of numbers (written with numpy): the engine
+differentiates them by the complex step (exact first derivatives), the second and third
+derivatives (Newton's matrix, the Taylor term) by differences of those.
+"""
+from dataclasses import dataclass
+from typing import Callable, Union
+
+import numpy as np
+
+from rodfem.core.joints import Point, quadratic_form
+from rodfem.errors import ConstraintError
+
+COMPLEX_STEP = 1e-30
+TAYLOR_BELOW = 1e-3     # |dxi| <= TAYLOR_BELOW |xi|: the Taylor term instead of the difference quotient
+
+
+def _values(fn, xi):
+    return np.atleast_1d(np.asarray(fn(xi), dtype=float))
+
+
+class Energy:
+    """psi(xi) of a measure with m components and its derivatives (numbers)."""
+
+    def __init__(self, psi: Callable, m: int, where: str):
+        self.psi, self.m, self.where = psi, m, where
+
+    def __call__(self, xi) -> float:
+        value = np.asarray(self.psi(xi[0] if self.m == 1 else xi), dtype=float)
+        if value.shape not in ((), (1,)):
+            raise ConstraintError(f"{self.where}: the energy must return one number (got shape {value.shape})")
+        return float(value.reshape(()))
+
+    def gradient(self, xi) -> np.ndarray:
+        """d psi / d xi by the complex step (exact to round-off)."""
+        g = np.zeros(self.m)
+        for k in range(self.m):
+            z = np.asarray(xi, dtype=complex)
+            z[k] += 1j * COMPLEX_STEP
+            try:
+                value = np.asarray(self.psi(z[0] if self.m == 1 else z))
+            except TypeError as err:
+                raise ConstraintError(f"{self.where}: the energy must accept complex numbers "
+                                      f"(write it with numpy, not math): {err}") from None
+            g[k] = float(np.imag(value).reshape(())) / COMPLEX_STEP
+        return g
+
+    def hessian(self, xi) -> np.ndarray:
+        """d^2 psi / d xi^2 by central differences of the gradient (Newton's matrix only)."""
+        H = np.zeros((self.m, self.m))
+        for k in range(self.m):
+            step = 1e-6 * max(1.0, abs(xi[k]))
+            e = np.zeros(self.m)
+            e[k] = step
+            H[:, k] = (self.gradient(xi + e) - self.gradient(xi - e)) / (2 * step)
+        return 0.5 * (H + H.T)
+
+    def third(self, xi, u) -> float:
+        """D^3 psi(xi)[u, u, u] by the second difference of the directional derivative."""
+        n = np.linalg.norm(u)
+        if n == 0:
+            return 0.0
+        e = u / n
+        step = 1e-3 * max(1.0, float(np.max(np.abs(xi))))
+
+        def slope(t):
+            return self.gradient(xi + t * e) @ e
+        return (slope(step) - 2 * slope(0.0) + slope(-step)) / step**2 * n**3
+
+
+class Component:
+    """What a Potential and a Resistance share: the two points and the quadratic measure."""
+
+    def __init__(self, measure: Callable, a: Point, b: Point, name: str):
+        self.measure, self.a, self.b, self.name = measure, a, b, name
+
+    def describe(self):
+        return f"{self.name} ({self.a.describe()} - {self.b.describe()})"
+
+    def bind(self, frame_a, frame_b, qa0, qb0, scale, rule):
+        """Fix the quadratic form xi(q) = 1/2 q.Q_k q + c_k.q + e_k, q = (q_a, q_b)."""
+        na, qa0, qb0 = len(qa0), np.asarray(qa0, float), np.asarray(qb0, float)
+        a0, b0 = frame_a(qa0), frame_b(qb0)
+        self.frames, self.na, self.rule = (frame_a, frame_b), na, rule
+
+        def xi(q):
+            return np.asarray(self.measure(frame_a(q[:na]), frame_b(q[na:]), a0, b0), dtype=float).ravel()
+        if len(a0.x) != len(b0.x):
+            raise ConstraintError(f"{self.describe()} connects a {len(a0.x)}D point to a {len(b0.x)}D point")
+        try:
+            xi(np.concatenate([qa0, qb0]))
+        except (TypeError, ValueError, IndexError) as err:
+            raise ConstraintError(f"{self.describe()} does not fit points that have "
+                                  f"{a0.kind} and {b0.kind} ({err})") from None
+        try:
+            self.Q, self.c, self.e = quadratic_form(xi, na + len(qb0), scale)
+        except ConstraintError as err:
+            raise ConstraintError(f"{self.describe()}: its measure {err}") from None
+        self.m = len(self.e)
+        self.q_initial = np.concatenate([qa0, qb0])
+
+    def xi(self, q):
+        """The measure xi(q)."""
+        return 0.5 * np.einsum("i,kij,j->k", q, self.Q, q) + self.c @ q + self.e
+
+    def G(self, q):
+        """d xi / dq at q (m x n)."""
+        return np.einsum("kij,j->ki", self.Q, q) + self.c
+
+
+class Potential(Component):
+    """Stored energy V = psi(xi(q)) between two points (see the module docstring)."""
+    dissipative = False
+
+    def __init__(self, measure: Callable, energy: Callable, a: Point, b: Point, name: str):
+        super().__init__(measure, a, b, name)
+        self.psi = energy
+
+    def bind(self, *args, **kwargs):
+        super().bind(*args, **kwargs)
+        self.energy_of = Energy(self.psi, self.m, self.describe())
+        V0 = self.energy_of(self.xi(self.q_initial))
+        if not np.isfinite(V0):
+            raise ConstraintError(f"{self.describe()}: the energy is not finite in the initial configuration "
+                                  f"(V = {V0}); place the points where it is defined")
+
+    def energy(self, q) -> float:
+        return self.energy_of(self.xi(q))
+
+    def co_energy(self, xi0, xi1, xim):
+        """(z, dz/dxi1) of the step: the midpoint gradient or the discrete gradient in xi."""
+        psi = self.energy_of
+        if self.rule != "discrete-gradient":
+            return psi.gradient(xim), None
+        xi_bar = 0.5 * (xi0 + xi1)
+        dxi = xi1 - xi0
+        grad = psi.gradient(xi_bar)
+        n2 = float(dxi @ dxi)
+        size = max(float(np.max(np.abs(xi0))), float(np.max(np.abs(xi1))))
+        if n2 > (TAYLOR_BELOW * size) ** 2:
+            bracket = psi(xi1) - psi(xi0) - grad @ dxi
+        else:
+            bracket = psi.third(xi_bar, dxi) / 24.0
+        return grad + (bracket / n2 if n2 > 0 else 0.0) * dxi, psi.hessian(xi_bar)
+
+    def at_rest(self, q):
+        """(r_v, dr_v/dq) of statics: the force G(q)^T psi'(xi(q)) and its derivative."""
+        G, xi = self.G(q), self.xi(q)
+        z = self.energy_of.gradient(xi)
+        return G.T @ z, np.einsum("k,kij->ij", z, self.Q) + G.T @ self.energy_of.hessian(xi) @ G
+
+    def step(self, q0, q1, v0, v1, h):
+        """(r_v, dr_v/dq1, dr_v/dv1, dissipated): r_v = G(q_m)^T z on the momentum rows."""
+        qm = 0.5 * (q0 + q1)
+        Gm = self.G(qm)
+        xim = self.xi(qm)
+        z, hess = self.co_energy(self.xi(q0), self.xi(q1), xim)
+        if hess is None:   # midpoint: z = psi'(xi(q_m)), dz/dq1 = psi''(xi_m) G_m / 2
+            hess = self.energy_of.hessian(xim)
+            dz_dq = 0.5 * hess @ Gm
+        else:              # discrete gradient: dz/dq1 ~ psi''(xi_bar) G(q1) / 2 (Newton's matrix)
+            dz_dq = 0.5 * hess @ self.G(q1)
+        r_v = Gm.T @ z
+        dr_dq = 0.5 * np.einsum("k,kij->ij", z, self.Q) + Gm.T @ dz_dq
+        return r_v, dr_dq, np.zeros((len(q1), len(q1))), 0.0
+
+
+class Resistance(Component):
+    """A damper: the force eta G(q_m)^T G(q_m) v_m, dissipating h eta |G(q_m) v_m|^2 >= 0."""
+    dissipative = True
+
+    def __init__(self, measure: Callable, coefficient: Union[float, Callable], a: Point, b: Point, name: str):
+        super().__init__(measure, a, b, name)
+        self.coefficient = coefficient
+
+    def bind(self, *args, **kwargs):
+        super().bind(*args, **kwargs)
+        self.eta(self.q_initial)
+
+    def eta(self, q) -> float:
+        """The coefficient at the configuration q (checked: finite and >= 0)."""
+        if callable(self.coefficient):
+            fa, fb = self.frames
+            value = self.coefficient(fa(q[: self.na]), fb(q[self.na:]))
+        else:
+            value = self.coefficient
+        value = np.asarray(value, dtype=float)
+        if value.shape not in ((), (1,)) or not np.isfinite(value).all() or float(value.reshape(())) < 0:
+            raise ConstraintError(f"{self.describe()}: the damping coefficient must be one number >= 0 "
+                                  f"(got {value.tolist()})")
+        return float(value.reshape(()))
+
+    def at_rest(self, q):
+        """Statics: a damper exerts no force at rest."""
+        return np.zeros(len(q)), np.zeros((len(q), len(q)))
+
+    def step(self, q0, q1, v0, v1, h):
+        qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
+        Gm = self.G(qm)
+        rate = Gm @ vm
+        eta = self.eta(qm)
+        r_v = eta * Gm.T @ rate
+        dr_dv = 0.5 * eta * Gm.T @ Gm
+        dr_dq = 0.5 * eta * (np.einsum("k,kij->ij", rate, self.Q) + Gm.T @ np.einsum("kij,j->ki", self.Q, vm))
+        if callable(self.coefficient):   # d eta / d q1 by central differences
+            n = len(q1)
+            deta = np.zeros(n)
+            for j in range(n):
+                step = 1e-7 * max(1.0, abs(qm[j]))
+                e = np.zeros(n)
+                e[j] = step
+                deta[j] = 0.5 * (self.eta(qm + e) - self.eta(qm - e)) / (2 * step)
+            dr_dq += np.outer(Gm.T @ rate, deta)
+        return r_v, dr_dq, dr_dv, h * eta * float(rate @ rate)
+
+
+@dataclass(frozen=True)
+class Law:
+    """What forms/components.py writes: a measure and its energy psi ('potential') or damping
+    coefficient eta ('resistance'); `System.connect(law, a, b)` places it between two points."""
+    kind: str
+    measure: Callable
+    value: object
+    label: str
+
+    def between(self, a: Point, b: Point, name: str) -> Component:
+        return (Potential if self.kind == "potential" else Resistance)(self.measure, self.value, a, b, name)
+
+
+def potential(measure: Callable, energy: Callable, label: str = "potential") -> Law:
+    """Stored energy psi(xi) of the quadratic measure xi(a, b, a0, b0)."""
+    return Law("potential", measure, energy, label)
+
+
+def resistance(measure: Callable, coefficient: Union[float, Callable], label: str = "damper") -> Law:
+    """A damper on the rate of the quadratic measure xi(a, b, a0, b0), with the coefficient eta
+    (a number, or a function eta(a, b) of the two points' frames at the step's midpoint)."""
+    return Law("resistance", measure, coefficient, label)
