@@ -82,8 +82,16 @@ def torsional_spring(k):
 
 def damper(eta):
     """A damper on the relative velocity, force eta (v_b - v_a); eta a number or a function
-    eta(a, b) of the points' frames at the step's midpoint."""
+    eta(a, b) of the points' frames at the step's midpoint.  It resists every relative motion,
+    a rigid rotation of the pair too (the four-particle example's damper); `dashpot` does not."""
     return resistance(separation, eta, "damper")
+
+
+def dashpot(c):
+    """A dashpot along the line between the points: force c (e . (v_b - v_a)) e, e = (x_b - x_a)/|x_b - x_a|
+    (objective: a rigid rotation of the pair dissipates nothing).  As a damper on the rate of the
+    squared length, eta = c / (4 |x_b - x_a|^2) at the step's midpoint."""
+    return resistance(squared_length, lambda a, b: c / (4.0 * float((b.x - a.x) @ (b.x - a.x))), "dashpot")
 
 
 def rotational_damper(eta):

@@ -35,6 +35,7 @@ The energy functions psi are plain functions of numbers (written with numpy): th
 differentiates them by the complex step (exact first derivatives), the second and third
 derivatives (Newton's matrix, the Taylor term) by differences of those.
 """
+import warnings
 from dataclasses import dataclass
 from typing import Callable, Union
 
@@ -44,6 +45,7 @@ from rodfem.core.joints import Point, quadratic_form
 from rodfem.errors import ConstraintError
 
 COMPLEX_STEP = 1e-30
+COMPLEX_WARNING = getattr(np, "exceptions", np).ComplexWarning   # a complex number made real (math.sqrt)
 TAYLOR_BELOW = 1e-3     # |dxi| <= TAYLOR_BELOW |xi|: the Taylor term instead of the difference quotient
 
 
@@ -70,8 +72,10 @@ class Energy:
             z = np.asarray(xi, dtype=complex)
             z[k] += 1j * COMPLEX_STEP
             try:
-                value = np.asarray(self.psi(z[0] if self.m == 1 else z))
-            except TypeError as err:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("error", COMPLEX_WARNING)
+                    value = np.asarray(self.psi(z[0] if self.m == 1 else z))
+            except (TypeError, COMPLEX_WARNING) as err:
                 raise ConstraintError(f"{self.where}: the energy must accept complex numbers "
                                       f"(write it with numpy, not math): {err}") from None
             g[k] = float(np.imag(value).reshape(())) / COMPLEX_STEP
@@ -152,6 +156,7 @@ class Potential(Component):
         super().bind(*args, **kwargs)
         self.energy_of = Energy(self.psi, self.m, self.describe())
         V0 = self.energy_of(self.xi(self.q_initial))
+        self.energy_of.gradient(self.xi(self.q_initial))   # refuses an energy that cannot be differentiated
         if not np.isfinite(V0):
             raise ConstraintError(f"{self.describe()}: the energy is not finite in the initial configuration "
                                   f"(V = {V0}); place the points where it is defined")
