@@ -46,6 +46,8 @@ class Mutation:
 
 
 M = Mutation
+JOINTS_3D = "tests/models/test_joint_oracles.py::test_joint_between_two_tumbling_bodies_holds_its_definition"
+JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -317,6 +319,48 @@ MUTATIONS = [
       [("order = np.concatenate([[seg[0]], order, [seg[-1]]])", "order = np.concatenate([[seg[-1]], order, [seg[0]]])")],
       ["tests/io/test_output.py::test_section_caps_face_outwards_and_carry_their_end_values"],
       "each cap of the section surface carries the other end's values"),
+    # -- joints between moving bodies (issue 22) --
+    M("prismatic-reference-guide", "forms/joints.py",
+      [("        return [*locked_rotation(a, b, a0, b0),\n"
+        "                (b.x - a.x) @ a.d[j] - r0 @ a0.d[j], (b.x - a.x) @ a.d[k] - r0 @ a0.d[k]]",
+        "        return [*locked_rotation(a, b, a0, b0),\n"
+        "                (b.x - a.x) @ a0.d[j] - r0 @ a0.d[j], (b.x - a.x) @ a0.d[k] - r0 @ a0.d[k]]")],
+      [f"{JOINTS_3D}[prismatic-axis0-gravity]", f"{JOINTS_3D}[prismatic-axis2-free]"],
+      "the prismatic pair's guide along a's initial directors a0.d, not its current ones (a slide "
+      "along a turned guide leaves the line; with the ground as a nothing changes)"),
+    M("revolute-hinge-fixed-in-space", "forms/joints.py",
+      [("    def revolute(a, b, a0, b0):\n        t = _carried(a, _relative_rotation(a0, b0))",
+        "    def revolute(a, b, a0, b0):\n        t = _carried(a0, _relative_rotation(a0, b0))")],
+      [f"{JOINTS_3D}[revolute-axis0-gravity]", f"{JOINTS_3D}[revolute-axis2-free]"],
+      "the revolute's hinge axis stays where it started in space instead of turning with a"),
+    M("cylindrical-turns-about-b-axis", "forms/joints.py",
+      [("        s = _carried(b, _relative_rotation(a0, b0).T)     # R_b C^T: a's frame as b carries it\n"
+        "        r0 = b0.x - a0.x\n        return [a.d[axis] @ s[j], a.d[axis] @ s[k],",
+        "        t = _carried(a, _relative_rotation(a0, b0))\n"
+        "        r0 = b0.x - a0.x\n        return [b.d[axis] @ t[j], b.d[axis] @ t[k],")],
+      [f"{JOINTS_3D}[cylindrical-axis0-gravity]", f"{JOINTS_3D}[cylindrical-axis2-free]"],
+      "the cylindrical pair as it was: b turns about its own d_axis but slides along a's (two axes "
+      "when they do not start aligned)"),
+    M("universal-a-axis-fixed-in-space", "forms/joints.py",
+      [("_axis(a, axis_a) @ _axis(b, axis_b)", "_axis(a0, axis_a) @ _axis(b, axis_b)")],
+      [f"{JOINTS_3D}[universal-axis0-gravity]", f"{JOINTS_3D}[universal-axis2-free]"],
+      "the universal joint's axis on a stays where it started in space instead of turning with a"),
+    M("locked-rotation-fixed-in-space", "forms/joints.py",
+      [("    t = _carried(a, _relative_rotation(a0, b0))\n    return [b.d[0] @ t[1]",
+        "    t = _carried(a0, _relative_rotation(a0, b0))\n    return [b.d[0] @ t[1]")],
+      [f"{JOINTS_3D}[locked_rotation-axis0-gravity]", f"{JOINTS_3D}[rigid-axis2-free]", f"{JOINTS_3D}[prismatic-axis0-gravity]"],
+      "the locked rotation holds b's frame fixed in space, not relative to a's turning frame"),
+    M("distance-linearized", "forms/joints.py",
+      [("(b.x - a.x) @ (b.x - a.x) - (b0.x - a0.x) @ (b0.x - a0.x)",
+        "(b.x - a.x) @ (b0.x - a0.x) - (b0.x - a0.x) @ (b0.x - a0.x)")],
+      [f"{JOINTS_3D}[distance-axis0-gravity]", f"{JOINTS_3D}[distance-axis2-free]"],
+      "the distance joint linearized at t = 0: it holds the offset's projection on its initial "
+      "direction, not its length (right until the link turns)"),
+    M("planar-rigid-angle-sum", "forms/joints.py",
+      [("return [*(a.x - b.x), (b.phi - a.phi) - (b0.phi - a0.phi)]",
+        "return [*(a.x - b.x), (b.phi + a.phi) - (b0.phi + a0.phi)]")],
+      [f"{JOINTS_PLANAR}[planar_rigid-beam-at-0.6rad]", f"{JOINTS_PLANAR}[planar_rigid-beam-at-2.4rad]"],
+      "the planar weld holds the sum of the angles, not their difference (b turns against a)"),
 ]
 
 
