@@ -329,8 +329,8 @@ MUTATIONS = [
       "the prismatic pair's guide along a's initial directors a0.d, not its current ones (a slide "
       "along a turned guide leaves the line; with the ground as a nothing changes)"),
     M("revolute-hinge-fixed-in-space", "forms/joints.py",
-      [("    def revolute(a, b, a0, b0):\n        t = _carried(a, _relative_rotation(a0, b0))",
-        "    def revolute(a, b, a0, b0):\n        t = _carried(a0, _relative_rotation(a0, b0))")],
+      [("        return [*spherical(a, b, a0, b0), a.d[axis] @ s[j], a.d[axis] @ s[k]]",
+        "        return [*spherical(a, b, a0, b0), a0.d[axis] @ s[j], a0.d[axis] @ s[k]]")],
       [f"{JOINTS_3D}[revolute-axis0-gravity]", f"{JOINTS_3D}[revolute-axis2-free]"],
       "the revolute's hinge axis stays where it started in space instead of turning with a"),
     M("cylindrical-turns-about-b-axis", "forms/joints.py",

@@ -47,14 +47,15 @@ def rigid(a, b, a0, b0):
 
 
 def revolute(axis=0):
-    """Revolute (hinge) pair: the points coincide and b's director d_axis stays along the axis a
-    carries, b.d_axis . (R_a C)_j = 0 for the two other j (5 conditions).  The hinge is b's d_axis,
-    fixed in a along (R_a C)_axis: a's d_axis when b's d_axis starts along it."""
+    """Revolute (hinge) pair about a's director d_axis: the points coincide and a's d_axis stays
+    along the axis b carries, a.d_axis . (R_b C^T)_j = 0 for the two other j (5 conditions).  The
+    hinge is fixed in both bodies (in b: where a's d_axis was at t = 0), like the cylindrical
+    pair's axis; b's own d_axis need not start along it."""
     j, k = _others(axis)
 
     def revolute(a, b, a0, b0):
-        t = _carried(a, _relative_rotation(a0, b0))
-        return [*spherical(a, b, a0, b0), b.d[axis] @ t[j], b.d[axis] @ t[k]]
+        s = _carried(b, _relative_rotation(a0, b0).T)     # R_b C^T: a's frame as b carries it
+        return [*spherical(a, b, a0, b0), a.d[axis] @ s[j], a.d[axis] @ s[k]]
     return revolute
 
 
@@ -73,8 +74,8 @@ def prismatic(axis=0):
 def cylindrical(axis=0):
     """Cylindrical pair along a's director d_axis: b may turn about and slide along it (4 conditions):
     a.d_axis stays along the axis b carries, a.d_axis . (R_b C^T)_j = 0, and (x_b - x_a) . a.d_j is
-    fixed, for the two other j.  (Turning about b's d_axis instead, as revolute does, would be
-    another axis than the slide's when b's d_axis does not start along a's.)"""
+    fixed, for the two other j.  (Turning about b's d_axis instead would be another axis than the
+    slide's when b's d_axis does not start along a's.)"""
     j, k = _others(axis)
 
     def cylindrical(a, b, a0, b0):

@@ -102,7 +102,7 @@ def placement(name, c):
     if name == "rigid":
         return R_b, 0 * r0, w_a, u_a
     if name == "revolute":
-        return R_b, 0 * r0, w_a + s1 * R_b @ unit(c["axis"]), u_a       # about b's d_axis
+        return R_b, 0 * r0, w_a + s1 * n, u_a                            # about a's d_axis
     if name == "prismatic":
         return R_b, r0, w_a, u_a + np.cross(w_a, r0) + s2 * n
     if name == "cylindrical":
@@ -182,8 +182,9 @@ def definition(name, c, a, b, a0, b0):
     if name == "rigid":
         return [*together, *(rel - C).ravel()], turning(R_a @ R_a0.T)
     if name == "revolute":
-        # b's rotation relative to its initial placement on a, in b's initial frame: about e_axis only
-        Q = C.T @ rel
+        # b turns about a's d_axis: its rotation relative to its initial placement on a, in a's
+        # frame, keeps e_axis (as the cylindrical pair, without the slide)
+        Q = rel @ C.T
         return [*together, *(Q @ unit(ax) - unit(ax))], turning(Q)
     if name == "prismatic":
         return [*(rel - C).ravel(), *(r - r0)[others]], abs((r - r0)[ax])
