@@ -18,7 +18,7 @@ A new spring law is a new function here; the engine needs nothing else.
 """
 import numpy as np
 
-from rodfem.core.components import potential, resistance
+from rodfem.core.components import feedback, potential, resistance
 
 # -- measures (quadratic in the points' coordinates) -------------------------------------------
 
@@ -102,3 +102,33 @@ def rotational_damper(eta):
 def length_dependent(eta0, alpha):
     """eta = eta0 (1 + alpha |x_b - x_a|^2) (the four-particle example's damper)."""
     return lambda a, b: eta0 * (1.0 + alpha * float((b.x - a.x) @ (b.x - a.x)))
+
+
+# -- controllers at a port (Ortega, van der Schaft, Maschke, Escobar, Automatica 38 (2002)) ------
+
+def pd_control(kp, kd, set_point=0.0, measure=relative_angle):
+    """PD control of the measure (default: the relative angle, e.g. a hub's angle to the ground)
+    towards set_point (a number or a function of t): u = -kp (xi - r(t)) - kd xi'.  As a port-
+    Hamiltonian controller it is a virtual spring psi = kp/2 (xi - r(t))^2 (energy shaping: the
+    closed loop's energy has its minimum at the set point) and a damper kd (damping injection),
+    exactly passive: with a constant set point the closed loop only loses energy; a moving set
+    point supplies the work of the moving spring anchor (in `supplied`)."""
+    r = set_point if callable(set_point) else (lambda t, value=float(set_point): value)
+    spring_part = potential(measure, lambda xi, t: 0.5 * kp * (xi - r(t)) ** 2, "P", timed=True)
+    return spring_part, resistance(measure, kd, "D")
+
+
+def control_law(law, measure=relative_angle):
+    """Any control law u = law(t, xi, xi') of the measure at the port (default: the relative angle,
+    u a moment), read at the step's midpoint; its supplied work h u xi' is recorded."""
+    return feedback(measure, law, "control")
+
+
+def rest_to_rest(start, end, t0, t1):
+    """A smooth set point from `start` at t0 to `end` at t1, at rest at both ends: the quintic
+    r = start + (end - start) (10 s^3 - 15 s^4 + 6 s^5), s = (t - t0)/(t1 - t0) (zero velocity and
+    acceleration at t0 and t1)."""
+    def r(t):
+        s = min(max((t - t0) / (t1 - t0), 0.0), 1.0) if t1 > t0 else 1.0
+        return start + (end - start) * s**3 * (10 - 15 * s + 6 * s**2)
+    return r

@@ -305,5 +305,5 @@ class StaticJointRows(JointRows):
                 blocks = (("v", "q", np.einsum("k,kij->ij", lam, j.Q)), ("v", "lam", G.T), ("lam", "q", G))
                 self._terms.append((j, G.T @ lam, g, blocks, 0.0, 0.0))
             for c in self.components:   # springs at rest: G(q)^T psi'(xi(q)); dampers: nothing
-                r_v, dr_dq = c.at_rest(vals[c.q_at])
+                r_v, dr_dq = c.at_rest(vals[c.q_at], self.t)
                 self._terms.append((c, r_v, np.zeros(0), (("v", "q", dr_dq),), 0.0, 0.0))

@@ -135,6 +135,10 @@ class Component:
         self.m = len(self.e)
         self.q_initial = np.concatenate([qa0, qb0])
 
+    def observe(self, q1, v1, t1, q0, v0, t0) -> dict:
+        """History columns of the state (q1, v1) at t1 after the step from (q0, v0) at t0 (none)."""
+        return {}
+
     def xi(self, q):
         """The measure xi(q)."""
         return 0.5 * np.einsum("i,kij,j->k", q, self.Q, q) + self.c @ q + self.e
@@ -145,28 +149,41 @@ class Component:
 
 
 class Potential(Component):
-    """Stored energy V = psi(xi(q)) between two points (see the module docstring)."""
+    """Stored energy V = psi(xi(q)) between two points (see the module docstring); with `timed`,
+    psi(xi, t): its change in time (a moving set point) is work supplied to the system,
+    [psi(xi_1, t_1) - psi(xi_1, t_m)] + [psi(xi_0, t_m) - psi(xi_0, t_0)] in a step, and z is the
+    discrete gradient of psi(., t_m), so that V_{n+1} - V_n = z . dxi + that work exactly."""
     dissipative = False
 
-    def __init__(self, measure: Callable, energy: Callable, a: Point, b: Point, name: str):
+    def __init__(self, measure: Callable, energy: Callable, a: Point, b: Point, name: str, timed: bool = False):
         super().__init__(measure, a, b, name)
-        self.psi = energy
+        self.psi, self.timed = energy, timed
+
+    def energy_at(self, t) -> Energy:
+        """psi(., t) (psi itself when the energy does not depend on time)."""
+        if not self.timed:
+            return self.energy_of
+        return Energy(lambda xi: self.psi(xi, t), self.m, self.describe())
 
     def bind(self, *args, **kwargs):
         super().bind(*args, **kwargs)
         self.energy_of = Energy(self.psi, self.m, self.describe())
-        V0 = self.energy_of(self.xi(self.q_initial))
-        self.energy_of.gradient(self.xi(self.q_initial))   # refuses an energy that cannot be differentiated
+        psi = self.energy_at(0.0)
+        V0 = psi(self.xi(self.q_initial))
+        psi.gradient(self.xi(self.q_initial))   # refuses an energy that cannot be differentiated
         if not np.isfinite(V0):
             raise ConstraintError(f"{self.describe()}: the energy is not finite in the initial configuration "
                                   f"(V = {V0}); place the points where it is defined")
 
-    def energy(self, q) -> float:
-        return self.energy_of(self.xi(q))
+    def energy(self, q, t=0.0) -> float:
+        return self.energy_at(t)(self.xi(q))
 
-    def co_energy(self, xi0, xi1, xim):
+    def observe(self, q1, v1, t1, q0, v0, t0):
+        """`name.V`: the stored energy at t1."""
+        return {f"{self.name}.V": self.energy(q1, t1)}
+
+    def co_energy(self, psi, xi0, xi1, xim):
         """(z, dz/dxi1) of the step: the midpoint gradient or the discrete gradient in xi."""
-        psi = self.energy_of
         if self.rule != "discrete-gradient":
             return psi.gradient(xim), None
         xi_bar = 0.5 * (xi0 + xi1)
@@ -180,26 +197,33 @@ class Potential(Component):
             bracket = psi.third(xi_bar, dxi) / 24.0
         return grad + (bracket / n2 if n2 > 0 else 0.0) * dxi, psi.hessian(xi_bar)
 
-    def at_rest(self, q):
+    def at_rest(self, q, t=0.0):
         """(r_v, dr_v/dq) of statics: the force G(q)^T psi'(xi(q)) and its derivative."""
+        psi = self.energy_at(t)
         G, xi = self.G(q), self.xi(q)
-        z = self.energy_of.gradient(xi)
-        return G.T @ z, np.einsum("k,kij->ij", z, self.Q) + G.T @ self.energy_of.hessian(xi) @ G
+        z = psi.gradient(xi)
+        return G.T @ z, np.einsum("k,kij->ij", z, self.Q) + G.T @ psi.hessian(xi) @ G
 
-    def step(self, q0, q1, v0, v1, h):
-        """(r_v, dr_v/dq1, dr_v/dv1, dissipated): r_v = G(q_m)^T z on the momentum rows."""
+    def step(self, q0, q1, v0, v1, h, t0, t1):
+        """(r_v, dr_v/dq1, dr_v/dv1, supplied, dissipated): r_v = G(q_m)^T z on the momentum rows."""
         qm = 0.5 * (q0 + q1)
         Gm = self.G(qm)
-        xim = self.xi(qm)
-        z, hess = self.co_energy(self.xi(q0), self.xi(q1), xim)
+        xi0, xi1, xim = self.xi(q0), self.xi(q1), self.xi(qm)
+        tm = 0.5 * (t0 + t1)
+        psi = self.energy_at(tm)
+        z, hess = self.co_energy(psi, xi0, xi1, xim)
         if hess is None:   # midpoint: z = psi'(xi(q_m)), dz/dq1 = psi''(xi_m) G_m / 2
-            hess = self.energy_of.hessian(xim)
+            hess = psi.hessian(xim)
             dz_dq = 0.5 * hess @ Gm
         else:              # discrete gradient: dz/dq1 ~ psi''(xi_bar) G(q1) / 2 (Newton's matrix)
             dz_dq = 0.5 * hess @ self.G(q1)
         r_v = Gm.T @ z
         dr_dq = 0.5 * np.einsum("k,kij->ij", z, self.Q) + Gm.T @ dz_dq
-        return r_v, dr_dq, np.zeros((len(q1), len(q1))), 0.0
+        work = 0.0
+        if self.timed:
+            before, after = self.energy_at(t0), self.energy_at(t1)
+            work = (after(xi1) - psi(xi1)) + (psi(xi0) - before(xi0))
+        return r_v, dr_dq, np.zeros((len(q1), len(q1))), work, 0.0
 
 
 class Resistance(Component):
@@ -227,11 +251,11 @@ class Resistance(Component):
                                   f"(got {value.tolist()})")
         return float(value.reshape(()))
 
-    def at_rest(self, q):
+    def at_rest(self, q, t=0.0):
         """Statics: a damper exerts no force at rest."""
         return np.zeros(len(q)), np.zeros((len(q), len(q)))
 
-    def step(self, q0, q1, v0, v1, h):
+    def step(self, q0, q1, v0, v1, h, t0, t1):
         qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
         Gm = self.G(qm)
         rate = Gm @ vm
@@ -240,36 +264,104 @@ class Resistance(Component):
         dr_dv = 0.5 * eta * Gm.T @ Gm
         dr_dq = 0.5 * eta * (np.einsum("k,kij->ij", rate, self.Q) + Gm.T @ np.einsum("kij,j->ki", self.Q, vm))
         if callable(self.coefficient):   # d eta / d q1 by central differences
-            n = len(q1)
-            deta = np.zeros(n)
-            for j in range(n):
-                step = 1e-7 * max(1.0, abs(qm[j]))
-                e = np.zeros(n)
-                e[j] = step
-                deta[j] = 0.5 * (self.eta(qm + e) - self.eta(qm - e)) / (2 * step)
-            dr_dq += np.outer(Gm.T @ rate, deta)
-        return r_v, dr_dq, dr_dv, h * eta * float(rate @ rate)
+            deta = _differences(self.eta, qm, 1e-7)
+            dr_dq += 0.5 * np.outer(Gm.T @ rate, deta)
+        return r_v, dr_dq, dr_dv, 0.0, h * eta * float(rate @ rate)
+
+
+class Feedback(Component):
+    """A control law at a port: the input u = law(t, xi, xi') (generalized forces along the measure,
+    m numbers) acts on the points as G^T u, read at the step's midpoint t_m, xi(q_m), G(q_m) v_m, and
+    supplies the work h u . xi'_m = u . (xi_{n+1} - xi_n) (exact: xi is quadratic).  Any Python
+    function: Newton's matrix takes its derivatives by differences."""
+    dissipative = False
+
+    def __init__(self, measure: Callable, law: Callable, a: Point, b: Point, name: str):
+        super().__init__(measure, a, b, name)
+        self.law = law
+
+    def u(self, t, xi, rate):
+        value = np.atleast_1d(np.asarray(self.law(t, xi[0] if self.m == 1 else xi,
+                                                  rate[0] if self.m == 1 else rate), dtype=float))
+        if value.shape != (self.m,) or not np.all(np.isfinite(value)):
+            raise ConstraintError(f"{self.describe()}: the control law must return {self.m} finite "
+                                  f"number(s) (got {value.tolist()} at t = {t:g})")
+        return value
+
+    def bind(self, *args, **kwargs):
+        super().bind(*args, **kwargs)
+        self.u(0.0, self.xi(self.q_initial), np.zeros(self.m))
+
+    def observe(self, q1, v1, t1, q0, v0, t0):
+        """`name.u1 ...`: the input of the last step (at its midpoint; at t = 0 the law at the state)."""
+        if q0 is None:
+            q, v, t = q1, v1, t1
+        else:
+            q, v, t = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1)
+        u = self.u(t, self.xi(q), self.G(q) @ v)
+        return {f"{self.name}.u{i + 1}": float(x) for i, x in enumerate(u)}
+
+    def at_rest(self, q, t=0.0):
+        G, xi = self.G(q), self.xi(q)
+        u = self.u(t, xi, np.zeros(self.m))
+        du = _differences(lambda x: self.u(t, x, np.zeros(self.m)), xi, 1e-7)
+        return -G.T @ u, -(np.einsum("k,kij->ij", u, self.Q) + G.T @ du @ G)
+
+    def step(self, q0, q1, v0, v1, h, t0, t1):
+        qm, vm, tm = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1)
+        Gm = self.G(qm)
+        xim, rate = self.xi(qm), Gm @ vm
+        u = self.u(tm, xim, rate)
+        du_dxi = _differences(lambda x: self.u(tm, x, rate), xim, 1e-7)
+        du_drate = _differences(lambda r: self.u(tm, xim, r), rate, 1e-7)
+        drate_dq = 0.5 * np.einsum("kij,j->ki", self.Q, vm)
+        r_v = -Gm.T @ u
+        dr_dq = -(0.5 * np.einsum("k,kij->ij", u, self.Q) + Gm.T @ (0.5 * du_dxi @ Gm + du_drate @ drate_dq))
+        dr_dv = -Gm.T @ (0.5 * du_drate @ Gm)
+        return r_v, dr_dq, dr_dv, h * float(u @ rate), 0.0
+
+
+def _differences(f, x, relative):
+    """The Jacobian of f at x by central differences (steps `relative` max(1, |x_j|))."""
+    x = np.asarray(x, dtype=float)
+    f0 = np.atleast_1d(f(x))
+    J = np.zeros((len(f0), len(x)))
+    for j in range(len(x)):
+        step = relative * max(1.0, abs(x[j]))
+        e = np.zeros(len(x))
+        e[j] = step
+        J[:, j] = (np.atleast_1d(f(x + e)) - np.atleast_1d(f(x - e))) / (2 * step)
+    return J
 
 
 @dataclass(frozen=True)
 class Law:
-    """What forms/components.py writes: a measure and its energy psi ('potential') or damping
-    coefficient eta ('resistance'); `System.connect(law, a, b)` places it between two points."""
+    """What forms/components.py writes: a measure and its energy psi ('potential'), damping
+    coefficient eta ('resistance') or control law u ('feedback'); `System.connect(law, a, b)`
+    places it between two points.  `timed`: psi(xi, t)."""
     kind: str
     measure: Callable
     value: object
     label: str
+    timed: bool = False
 
     def between(self, a: Point, b: Point, name: str) -> Component:
-        return (Potential if self.kind == "potential" else Resistance)(self.measure, self.value, a, b, name)
+        if self.kind == "potential":
+            return Potential(self.measure, self.value, a, b, name, self.timed)
+        return (Resistance if self.kind == "resistance" else Feedback)(self.measure, self.value, a, b, name)
 
 
-def potential(measure: Callable, energy: Callable, label: str = "potential") -> Law:
-    """Stored energy psi(xi) of the quadratic measure xi(a, b, a0, b0)."""
-    return Law("potential", measure, energy, label)
+def potential(measure: Callable, energy: Callable, label: str = "potential", timed: bool = False) -> Law:
+    """Stored energy psi(xi) (or psi(xi, t) if `timed`) of the quadratic measure xi(a, b, a0, b0)."""
+    return Law("potential", measure, energy, label, timed)
 
 
 def resistance(measure: Callable, coefficient: Union[float, Callable], label: str = "damper") -> Law:
     """A damper on the rate of the quadratic measure xi(a, b, a0, b0), with the coefficient eta
     (a number, or a function eta(a, b) of the two points' frames at the step's midpoint)."""
     return Law("resistance", measure, coefficient, label)
+
+
+def feedback(measure: Callable, law: Callable, label: str = "control") -> Law:
+    """A control law u = law(t, xi, xi') acting along the quadratic measure xi(a, b, a0, b0)."""
+    return Law("feedback", measure, law, label)

@@ -116,11 +116,17 @@ class System:
         self.joints.append(joint)
         return joint
 
-    def connect(self, law: Law, a: Point, b: Point, name: str = ""):
-        """Place a component of rodfem/forms/components.py (a spring, a damper) between point a and
-        point b (or the ground): its energy joins H, its dissipation the `dissipated` column."""
+    def connect(self, law, a: Point, b: Point, name: str = ""):
+        """Place a component of rodfem/forms/components.py (a spring, a damper, a control law) between
+        point a and point b (or the ground): its energy joins H, its dissipation the `dissipated`
+        column, its input's work `supplied`.  A controller made of parts (a tuple of laws: PD = a
+        spring and a damper) places each, named name_label; returns the component(s)."""
+        if isinstance(law, tuple) and law and all(isinstance(part, Law) for part in law):
+            base = name or f"{law[0].label.split()[0]}{len(self.components) + 1}"
+            return tuple(self.connect(part, a, b, f"{base}_{part.label.replace(' ', '_')}") for part in law)
         if not isinstance(law, Law):
-            raise ConstraintError(f"component {name or law!r} is not a spring or damper of rodfem.forms.components")
+            raise ConstraintError(f"component {name or law!r} is not a spring, damper or control law of "
+                                  "rodfem.forms.components")
         self._check_points(f"component {name or law.label}", a, b)
         component = law.between(a, b, name or f"{law.label.replace(' ', '_')}{len(self.components) + 1}")
         self._check_name(component.name)
@@ -335,7 +341,7 @@ class System:
 
     def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports and the driven joints."""
-        joints = self.assembler.coupling.work if self.joints else 0.0
+        joints = self.assembler.coupling.work if (self.joints or self.components) else 0.0
         return self._sum("work") + joints
 
     @property
@@ -456,9 +462,12 @@ class PointIndex:
         self.x0_values, self.times = self.values(X0), (t0, t1, h)
 
     def stored_energy(self, X) -> float:
-        """The components' stored energy sum V(q) at the state X (collective; the same on every rank)."""
+        """The springs' stored energy sum V(q, t) at the state X, t = t_{n+1} of the last step (collective;
+        the same on every rank)."""
         vals = self.values(X)
-        V = sum(c.energy(vals[c.q_at]) for c in self.components if not c.dissipative) if self.comm.rank == 0 else 0.0
+        V = 0.0
+        if self.comm.rank == 0:
+            V = sum(c.energy(vals[c.q_at], self.times[1]) for c in self.components if hasattr(c, "energy"))
         return self.comm.bcast(V, root=0)
 
     def check_independent(self, X0):
@@ -491,7 +500,8 @@ class PointIndex:
             raise ConstraintError(bad)
 
     def observe(self, X):
-        """Markers' positions, the joints' reactions lambda and the largest position residual |g|."""
+        """Markers' positions, the joints' reactions lambda and the largest position residual |g|, the
+        springs' energies V and the control laws' inputs u."""
         vals = self.values(X)
         obs = {}
         if self.comm.rank == 0:
@@ -503,6 +513,10 @@ class PointIndex:
                     obs[f"{j.name}.lambda{i + 1}"] = float(lam)
             if self.joints:
                 obs["constraint_residual"] = worst
+            for c in self.components:
+                obs.update(c.observe(vals[c.q_at], vals[c.v_at], t1,
+                                     None if self.x0_values is None else self.x0_values[c.q_at],
+                                     None if self.x0_values is None else self.x0_values[c.v_at], self.times[0]))
             for name, (pc, _) in self.marker_points.items():
                 model = pc.point.body.body.model
                 x = model.frame(pc.unpack(vals[self.marker_at[name]]), pc.point.offset).x
@@ -555,8 +569,8 @@ class JointRows:
             for j in self.joints:
                 self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1), 0.0))
             for c in self.components:
-                r_v, dr_dq, dr_dv, lost = c.step(v0[c.q_at], vals[c.q_at], v0[c.v_at], vals[c.v_at], h)
-                self._terms.append((c, r_v, np.zeros(0), (("v", "q", dr_dq), ("v", "v", dr_dv)), 0.0, lost))
+                r_v, dr_dq, dr_dv, work, lost = c.step(v0[c.q_at], vals[c.q_at], v0[c.v_at], vals[c.v_at], h, t0, t1)
+                self._terms.append((c, r_v, np.zeros(0), (("v", "q", dr_dq), ("v", "v", dr_dv)), work, lost))
 
     def terms(self, j, v0, v1, h, t0, t1):
         """(r_v, r_lam, {(rows, cols): block}, work) of joint j."""
