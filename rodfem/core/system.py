@@ -125,8 +125,8 @@ class System:
             base = name or f"{law[0].label.split()[0]}{len(self.components) + 1}"
             return tuple(self.connect(part, a, b, f"{base}_{part.label.replace(' ', '_')}") for part in law)
         if not isinstance(law, Law):
-            raise ConstraintError(f"component {name or law!r} is not a spring, damper or control law of "
-                                  "rodfem.forms.components")
+            raise ConstraintError(f"component {name or '(unnamed)'}: a {type(law).__name__} is not a spring, damper "
+                                  "or control law of rodfem.forms.components")
         self._check_points(f"component {name or law.label}", a, b)
         component = law.between(a, b, name or f"{law.label.replace(' ', '_')}{len(self.components) + 1}")
         self._check_name(component.name)

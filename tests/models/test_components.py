@@ -198,7 +198,7 @@ def test_static_hanging_spring_stretches_by_its_law(energy, stretch):
 def test_bad_components_are_one_line_errors():
     s = System()
     body = s.add("mass", PointMass(1.0, dim=3), initial=PointMass.initial((1.0, 0.0, 0.0)))
-    with pytest.raises(ConstraintError, match="not a spring or damper"):
+    with pytest.raises(ConstraintError, match="a function is not a spring, damper or control law"):
         s.connect(lambda a, b: 0.0, ground(), body.point())
     s.connect(damper(-1.0), ground((0.0, 0.0, 0.0)), body.point(), name="bad_damper")
     with pytest.raises(ConstraintError, match=r"bad_damper .*coefficient must be one number >= 0"):
