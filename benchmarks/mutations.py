@@ -361,6 +361,39 @@ MUTATIONS = [
         "return [*(a.x - b.x), (b.phi + a.phi) - (b0.phi + a0.phi)]")],
       [f"{JOINTS_PLANAR}[planar_rigid-beam-at-0.6rad]", f"{JOINTS_PLANAR}[planar_rigid-beam-at-2.4rad]"],
       "the planar weld holds the sum of the angles, not their difference (b turns against a)"),
+
+    # -- restart of dissipating and actuated scenes (issue 22) --
+    M("checkpoint-without-dissipated", "rodfem/io/checkpoint.py",
+      [("H=H, supplied=supplied,\n                dissipated=dissipated,", "H=H, supplied=supplied,\n                dissipated=0.0,")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-2d-killed-two-steps-after-a-checkpoint]",
+       "tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[driven-hub-arm-killed-two-steps-after-a-checkpoint]"],
+      "the checkpoint stores dissipated = 0: a resumed viscoelastic run reports only what it dissipated after the restart"),
+    M("resume-drops-the-frame-at-the-checkpoint", "rodfem/io/checkpoint.py",
+      [("if tf <= t * (1 + 1e-12) + 1e-300:", "if tf < t * (1 - 1e-12):")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-2d-killed-two-steps-after-a-checkpoint]"],
+      "a resumed run drops the frame at the checkpoint's time from the .pvd (the later frames take its file)"),
+    M("resume-renumbers-the-frames", "rodfem/io/checkpoint.py",
+      [("                self.frames = sorted(kept.items())\n", "                self.frames = []\n")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-string-killed-two-steps-after-a-checkpoint]"],
+      "a resumed run numbers its frames from 0 again: it overwrites the first frame files, the .pvd loses the earlier ones"),
+    M("restore-skips-the-maxwell-branches", "rodfem/io/checkpoint.py",
+      [("            what = f\"field {f.name} of body {bname or 'the scene'}\"\n",
+        "            what = f\"field {f.name} of body {bname or 'the scene'}\"\n"
+        "            if f.name[-2:] == \"_1\":   # the Maxwell branch's strain: left as built (relaxed)\n"
+        "                continue\n")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-string-killed-two-steps-after-a-checkpoint]",
+       "tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-3d-killed-two-steps-after-a-checkpoint]"],
+      "the restart leaves the Maxwell branches' internal strains (C_1, Gamma_1, kappa_1, M_1) relaxed, not as checkpointed"),
+    M("first-resumed-step-with-the-initial-inputs", "rodfem/analysis/timeloop.py",
+      [("            problem.set_time(t + 0.5 * dt)\n",
+        "            if start is None or n > first:   # the rebuilt scene's inputs u(0) in the first step after a restart\n"
+        "                problem.set_time(t + 0.5 * dt)\n")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[soft-arm-swing-killed-two-steps-after-a-checkpoint]"],
+      "the chamber's pressure and the tendon's tension of the first step after a restart not set from the restored clock"),
+    M("restart-without-the-newton-predictor", "rodfem/io/checkpoint.py",
+      [('previous = vector("previous") if meta.get("has_previous") else None', "previous = None")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-2d-killed-two-steps-after-a-checkpoint]"],
+      "the restart drops x_{n-1}: Newton starts from x_n, the resumed run differs at Newton's tolerance, not to the bit"),
 ]
 
 

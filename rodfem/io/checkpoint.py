@@ -21,7 +21,10 @@ assembly run in another order) and the reverse.  There is no random state.
 scene with the stored parameters, loads the checkpoint and continues: the
 rows of history.csv after the checkpoint (and a partly written last row) are
 dropped, the following rows appended, so history.csv equals that of the
-uninterrupted run.  Only ``t_end`` (to run further) may be changed.
+uninterrupted run; so do the frames (the .pvd entries after the checkpoint
+dropped, the later frames written again under the same names) and the
+pictures (the frames before the checkpoint read back from their files).
+Only ``t_end`` (to run further) may be changed.
 Everything is checked before DIR is touched (a refused resume leaves its
 summary.json and history.csv as they were): the checkpoint must fit the
 scene's mesh, and be of the run in DIR (the scene and parameters of its
@@ -402,8 +405,9 @@ def _rewrite(path, text):
 
 
 def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
-    """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint
-    (shapes.png and the animation then show the frames written after the restart)."""
+    """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint, their
+    pictures read back from their centreline files (shapes.png and the animation show every frame,
+    also for a run resumed from a checkpoint at t_end: killed before its summary and pictures)."""
     from rodfem.io.output import RunWriter
 
     class ResumedWriter(RunWriter):
@@ -430,4 +434,27 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
                         name = ds.get("file")
                         kept.setdefault(tf, []).append((name, name.replace("centreline/", "surface/", 1)))
                 self.frames = sorted(kept.items())
+                for tf, names in self.frames:
+                    try:
+                        self.snapshots.append((tf, [kept_sketch(outdir.file(files[0]), view, self.width)
+                                                    for files, view in zip(names, self.views)]))
+                    except (OSError, ValueError, KeyError, ET.ParseError):
+                        pass   # a frame file gone or damaged: the pictures go without it
     return ResumedWriter()
+
+
+def kept_sketch(path, view, width):
+    """The picture's Sketch of a body (its BodyView) at a frame written before the restart, from the
+    centreline file `path`: its points and section frame d1, d2 (, d3) are those of the state (a planar
+    model's d3 is e_z), the box that of the model: the Sketch of the uninterrupted run."""
+    from rodfem.io.animation import sketch
+    from rodfem.io.vtk import read_vtp
+    poly = read_vtp(path)
+    directors = None
+    if view.has_frame:
+        d = [poly.point_data[f"d{i}"].values for i in (1, 2, 3) if f"d{i}" in poly.point_data]
+        if len(d) == 2:
+            d.append(np.tile([0.0, 0.0, 1.0], (len(poly.points), 1)))
+        directors = np.stack(d, axis=-1)
+    box = tuple(view.model.box()) if view.body.rigid and hasattr(view.model, "box") else None
+    return sketch(SimpleNamespace(kind=view.kind, position=poly.points, directors=directors, box=box), width)

@@ -1,6 +1,7 @@
 """Checkpoint and restart (rodfem/io/checkpoint.py): a resumed run repeats the uninterrupted one bit by
-bit (serial, chord Newton, a killed run, mpirun -n 2), a 2-rank checkpoint restarts on one
-process to round-off, and bad input is one line."""
+bit (serial, chord Newton, a killed run, mpirun -n 2), every file of it for dissipating and actuated
+scenes, a 2-rank checkpoint restarts on one process to round-off, and bad input is one line."""
+import csv
 import json
 import os
 import shutil
@@ -13,7 +14,10 @@ import numpy as np
 import pytest
 from processes import REPO, command, environment, history, ok
 
+from rodfem import Support
 from rodfem.app.cli import main
+from rodfem.errors import Interrupted
+from rodfem.io.vtk import read_pvd, read_vtp
 
 
 def same_file(a, b):
@@ -193,6 +197,291 @@ def test_mpi_a_refused_resume_keeps_the_record(rodfem, tmp_path):
     p = rodfem("run", "--resume", run, "--quiet", np=2, timeout=300)
     assert p.returncode == 2 and "does not fit" in p.stderr, p.stderr[-3000:]   # 124: a rank left waiting
     assert record(run) == kept
+
+
+# -- dissipating and actuated scenes: every file of a resumed run (issue 22) --------------------------
+#
+# A run of a scene is stopped after step `stop` and resumed; every file it leaves is compared with the
+# uninterrupted run's (`same_run`), and the resumed run is checked on its own (`consistent`): the energy
+# balance over the whole run with the column `dissipated`, the frames at the levels its parameters ask
+# for, each written once, each at its time, the animation with every frame.  The stop is in process
+# and deterministic: "killed" ends the run between two steps (or after its last step, before its
+# summary and pictures) with nothing more written, as a SIGKILL does; "interrupted" with the
+# Interrupted of a SIGINT (summary.json "interrupted", the pictures drawn).
+
+class Killed(BaseException):
+    """A SIGKILL, in process (not an Exception: nothing in rodfem catches it, nothing more is written)."""
+
+
+def stop_after(monkeypatch, stop, how):
+    """The run stops after step `stop` (its row, frame and checkpoint written): killed or interrupted
+    before the next step, or killed before the summary and pictures ("killed-at-the-end")."""
+    from types import SimpleNamespace
+
+    from rodfem.analysis import timeloop
+    from rodfem.io.output import RunWriter
+    real = timeloop.interrupts
+
+    def check(comm, n, t, where=None):
+        if n == stop:
+            raise Killed() if how == "killed" else Interrupted(signal.SIGINT, n, t)
+        real.check(comm, n, t, where)
+
+    def finish(self, summary, result):
+        raise Killed()
+    if how == "killed-at-the-end":
+        monkeypatch.setattr(RunWriter, "finish", finish)
+    else:
+        monkeypatch.setattr(timeloop, "interrupts", SimpleNamespace(check=check))
+
+
+def driven_hub_arm():
+    """A multibody scene with a driven joint and dissipation: a viscoelastic planar beam (a Maxwell
+    branch) pinned at the origin and turned there by a driven `angle` joint (theta(t) = w t^2/2), a
+    point mass pinned at its free end."""
+    from rodfem.app.scene import Parameter, Scene, common
+    from rodfem.core.joints import ground
+    from rodfem.core.system import System
+    from rodfem.forms import joints, planar_beam
+    from rodfem.forms.rigid_body import PointMass
+
+    def build(p, comm):
+        s = System(integrator=p["integrator"], comm=comm)
+        beam = planar_beam.PlanarBeam(1.0, 0.01, planar_beam.quadratic(EA=1e3, GA=1e3, EI=10.0),
+                                      branches=[planar_beam.maxwell(p["tau1"], EA=100.0, GA=100.0, EI=1.0)])
+        arm = s.add("arm", beam, shape=planar_beam.straight((0.0, 0.0), (1.0, 0.0)), n_elements=p["n_elements"],
+                    supports=[Support("left", "pinned")])
+        tip = s.add("tip", PointMass(0.5, dim=2), initial=PointMass.initial((1.0, 0.0)))
+        s.join(joints.angle, ground((0.0, 0.0)), arm.start, name="hub", drive=lambda t: [0.5 * p["w"] * t * t])
+        s.join(joints.pin, arm.end, tip.point(), name="tip_pin")
+        s.marker("tip", arm.end)
+        return s
+    return Scene("driven-hub-arm", "viscoelastic arm turned by a driven hub joint, a point mass at its end",
+                 common(n_elements=4, dt=0.02, t_end=0.24) + [Parameter("w", 20.0, "1/s^2", "hub acceleration"),
+                                                              Parameter("tau1", 0.05, "s", "relaxation time", low=0)],
+                 build)
+
+
+# scene, parameters: 12 steps, frames at the even steps 0, 2, ..., 12 (COMMON), checkpoints every 4 steps
+RESUMED = {
+    "viscoelastic-cantilever-2d": ("viscoelastic-cantilever-2d",   # Maxwell branch (Gamma_1, kappa_1), tip force
+                                   dict(n_elements=4, dt=0.01, t_end=0.12, t_load=0.06, fy=-10)),
+    "viscoelastic-string": ("viscoelastic-string",                 # Maxwell branch C_1, discrete gradient, gravity
+                            dict(n_elements=4, dt=0.05, t_end=0.6)),
+    "viscoelastic-cantilever-3d": ("viscoelastic-cantilever-3d",   # 3D rod, Maxwell branch on M, wrench pulse
+                                   dict(n_elements=2, dt=0.005, t_end=0.06, t_load=0.03)),
+    "soft-arm-swing": ("soft-arm-swing",                           # 3D rod, a chamber and a tendon in turn
+                       dict(n_elements=3, dt=0.05, t_end=0.6, t_on=0.1)),
+    "driven-hub-arm": (driven_hub_arm(), {}),                      # two bodies, a driven joint, dissipation
+}
+COMMON = dict(checkpoint_every=4, frames=7)
+# how a run stops: checkpoint_every, the step after which it stops, how, the step its summary.json names
+STOPS = {
+    "killed-two-steps-after-a-checkpoint": (4, 6, "killed", 4),     # rows and frame of steps 5, 6 written again
+    "interrupted-at-a-checkpoint": (4, 8, "interrupted", 8),        # the frame at step 8 kept, not written twice
+    "killed-at-the-end": (4, 12, "killed-at-the-end", 8),           # nothing left to run: summary and pictures
+    "killed-after-a-checkpoint-between-two-frames": (3, 5, "killed", 3),   # frames 0-2 kept, 3 (step 6) written
+}
+
+
+def run_to_the_end(scene, params, out, resume=None):
+    """Run `scene` with `params` (over COMMON) into `out`, or resume the run there (params: t_end only)."""
+    from rodfem.app.driver import run_scene
+    run_scene(scene, params if resume else {**COMMON, **params}, out=str(out), resume=resume)
+
+
+# -- what a run leaves: compared file by file --
+
+NOT_COMPARED = {
+    ".rodfem.lock": "the pid of the last process that ran in the directory",
+}
+SUMMARY_NOT_COMPARED = {
+    "wall_time_s": "the time of the last process only (a resumed run's from the restart)",
+    "time_per_step_ms": "wall_time_s per step",
+}
+PICTURES = ("shapes.png", "energy.png", "animation.gif")   # the same bytes in serial, else there
+
+
+def files(path):
+    return sorted(os.path.relpath(os.path.join(d, f), path) for d, _, fs in os.walk(path) for f in fs
+                  if f not in NOT_COMPARED)
+
+
+def table(path):
+    """history.csv as (header, {column: array})."""
+    with open(os.path.join(path, "history.csv"), newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], {k: np.array([float(r[i]) for r in rows[1:]]) for i, k in enumerate(rows[0])}
+
+
+def difference(a, b):
+    """max |a - b| / max(max |a|, 1) of two arrays of the same shape (asserted)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    assert a.shape == b.shape, (a.shape, b.shape)
+    return float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1.0)) if a.size else 0.0
+
+
+def same_numbers(a, b, rtol, where, diffs):
+    """Nested JSON values a, b: the same keys, lengths, strings; numbers to rtol of max(|a|, 1)."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and list(a) == list(b), (where, a, b)
+        for k in a:
+            same_numbers(a[k], b[k], rtol, f"{where}.{k}", diffs)
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), (where, a, b)
+        for i, (x, y) in enumerate(zip(a, b)):
+            same_numbers(x, y, rtol, f"{where}[{i}]", diffs)
+    elif isinstance(a, (int, float)) and not isinstance(a, bool):
+        diffs[where] = d = difference(a, b)
+        assert d <= rtol, (where, a, b)
+    else:
+        assert a == b, (where, a, b)
+
+
+def largest(diffs, key, d, rtol, where):
+    diffs[key] = max(diffs.get(key, 0.0), d)
+    assert d <= rtol, (where, key, d)
+
+
+def same_run(full, resumed, rtol):
+    """Every file of the run in `resumed` is that of the run in `full`: history.csv column by column,
+    every .pvd collection entry by entry and every frame file it names array by array (and no other
+    frame file), summary.json (but SUMMARY_NOT_COMPARED), fields.json, checkpoint.npz key by key:
+    numbers to rtol of their scale (rtol = 0: the same bits, and then the pictures the same bytes).
+    Returns {what: largest relative difference}."""
+    diffs = {}
+    names = files(full)
+    assert files(resumed) == names
+    header, a = table(full)
+    header_b, b = table(resumed)
+    assert header == header_b and len(a["t"]) == len(b["t"])
+    for k in header:
+        largest(diffs, f"history.csv:{k}", difference(a[k], b[k]), rtol, k)
+    frames = set()
+    for pvd in ("centreline.pvd", "surface.pvd"):
+        entries = read_pvd(os.path.join(full, pvd))
+        assert read_pvd(os.path.join(resumed, pvd)) == entries, pvd   # times (repr), parts, files, bodies
+        for *_, name, _ in entries:
+            x, y = read_vtp(os.path.join(full, name)), read_vtp(os.path.join(resumed, name))
+            frames.add(name)
+            largest(diffs, "frames:points", difference(x.points, y.points), rtol, name)
+            for cells in ("verts", "lines", "polys"):
+                p, q = getattr(x, cells), getattr(y, cells)
+                assert len(p) == len(q) and all(np.array_equal(u, v) for u, v in zip(p, q)), (name, cells)
+            for data in ("point_data", "cell_data"):
+                u, v = getattr(x, data), getattr(y, data)
+                assert list(u) == list(v), (name, data)
+                for k in u:
+                    assert u[k].components == v[k].components, (name, k)
+                    largest(diffs, f"frames:{data}:{k}", difference(u[k].values, v[k].values), rtol, name)
+    assert {n for n in names if os.path.dirname(n) in ("centreline", "surface")} == frames   # none unnamed
+    with open(os.path.join(full, "summary.json")) as f, open(os.path.join(resumed, "summary.json")) as g:
+        s, r = json.load(f), json.load(g)
+    for k in SUMMARY_NOT_COMPARED:
+        del s[k], r[k]
+    same_numbers(s, r, rtol, "summary.json", diffs)
+    with open(os.path.join(full, "fields.json")) as f, open(os.path.join(resumed, "fields.json")) as g:
+        same_numbers(json.load(f), json.load(g), rtol, "fields.json", diffs)
+    with np.load(os.path.join(full, "checkpoint.npz")) as z, np.load(os.path.join(resumed, "checkpoint.npz")) as w:
+        assert sorted(z.files) == sorted(w.files)
+        same_numbers(json.loads(z["meta"].tobytes().decode()), json.loads(w["meta"].tobytes().decode()), rtol,
+                     "checkpoint.npz:meta", diffs)
+        for k in z.files:
+            if k != "meta":
+                largest(diffs, "checkpoint.npz:arrays", difference(z[k], w[k]), rtol, k)
+    for name in PICTURES:
+        with open(os.path.join(full, name), "rb") as f, open(os.path.join(resumed, name), "rb") as g:
+            same, written = f.read() == g.read(), os.path.getsize(os.path.join(resumed, name)) > 0
+        assert written and (same or rtol > 0), f"{name}: {'other bytes' if written else 'empty'}"
+    compared = {"history.csv", "centreline.pvd", "surface.pvd", "summary.json", "fields.json", "checkpoint.npz",
+                *frames, *PICTURES}
+    assert set(names) == compared, set(names) - compared          # every file looked at
+    return diffs
+
+
+def consistent(path, resumed_at):
+    """The run in `path` on its own: H(T) - H(0) + dissipated(T) - supplied(T) is the sum of the steps'
+    balance errors (each at solver tolerance), dissipated grows at every step (a dissipating run); the
+    frames are at the levels frame_levels(n, frames) of its parameters, each time and body once, each
+    in its own file, the one at the restart `resumed_at` too (if a level), the first body's end there
+    at history.csv's `tip`; animation.gif has a picture per frame."""
+    from PIL import Image
+
+    from rodfem.io.output import frame_levels
+    with open(os.path.join(path, "summary.json")) as f:
+        params = json.load(f)["parameters"]
+    _, h = table(path)
+    n_steps, dt = len(h["t"]) - 1, params["dt"]
+    assert np.array_equal(h["t"], np.arange(n_steps + 1) * dt)    # t_n = n dt, every level once
+    scale = np.max(np.abs(h["H"]))
+    balance = h["H"][-1] - h["H"][0] + h.get("dissipated", np.zeros(1))[-1] - h["supplied"][-1]
+    assert np.max(np.abs(h["balance_error"])) <= 1e-10 * scale
+    assert abs(balance - np.sum(h["balance_error"])) <= 1e-12 * scale, (balance, np.sum(h["balance_error"]))
+    if "dissipated" in h:
+        assert h["dissipated"][0] == 0 and np.all(np.diff(h["dissipated"]) > 0), h["dissipated"]
+    levels = sorted(frame_levels(n_steps, params["frames"]))
+    for pvd in ("centreline.pvd", "surface.pvd"):
+        entries = read_pvd(os.path.join(path, pvd))
+        parts = sorted({(part, name) for _, part, _, name in entries})
+        assert [(t, part, name) for t, part, _, name in entries] == \
+            [(n * dt, part, name) for n in levels for part, name in parts]
+        assert len({f for _, _, f, _ in entries}) == len(entries)        # no file shared by two entries
+        assert sum(t == resumed_at * dt for t, *_ in entries) == (len(parts) if resumed_at in levels else 0)
+        for t, part, file, name in entries:
+            assert os.path.isfile(os.path.join(path, file)), file
+            if pvd == "centreline.pvd" and "tip_x" in h and part == 0:     # the first body's end: `tip`
+                end = read_vtp(os.path.join(path, file)).points[-1]
+                tip = [h[f"tip_{c}"][int(round(t / dt))] for c in "xyz" if f"tip_{c}" in h]
+                assert np.allclose(end[:len(tip)], tip, rtol=0, atol=1e-12 * max(np.max(np.abs(tip)), 1.0)), (t, file)
+    with Image.open(os.path.join(path, "animation.gif")) as gif:
+        assert gif.n_frames == len(levels)
+
+
+@pytest.mark.parametrize("case, stop", [(c, s) for c in RESUMED for s in list(STOPS)[:3]]
+                         + [("viscoelastic-cantilever-2d", "killed-after-a-checkpoint-between-two-frames")])
+def test_every_file_of_a_resumed_dissipating_or_actuated_run(case, stop, monkeypatch, tmp_path):
+    """A dissipating or actuated run stopped (STOPS) and resumed leaves the files of the uninterrupted
+    run to the bit: history.csv with `dissipated` and `supplied`, the frames, summary.json but its wall
+    times, fields.json, the last checkpoint, the pictures; its energy balance holds over the restart
+    and its frames are those its parameters ask for, each once.  (Measured: no difference at all.)"""
+    scene, params = RESUMED[case]
+    every, after, how, noted = STOPS[stop]
+    params = {**params, "checkpoint_every": every}
+    full, part = tmp_path / "full", tmp_path / "part"
+    run_to_the_end(scene, params, full)
+    with monkeypatch.context() as m:
+        stop_after(m, after, how)
+        with pytest.raises(Interrupted if how == "interrupted" else Killed):
+            run_to_the_end(scene, params, part)
+    status = json.loads((part / "summary.json").read_text())
+    assert status["status"] == ("interrupted" if how == "interrupted" else "running") and status["steps"] == noted
+    _, h = table(part)
+    assert len(h["t"]) == after + 1 and read_pvd(part / "centreline.pvd")[-1][0] == h["t"][after // 2 * 2]   # the
+    # rows and frames (at even steps) up to the stop
+    run_to_the_end(scene, {}, part, resume=str(part))
+    diffs = same_run(full, part, rtol=0.0)
+    consistent(part, after // every * every)
+    print(case, stop, {k: v for k, v in diffs.items() if v})
+
+
+@pytest.mark.mpi
+def test_mpi_a_dissipating_run_resumed_on_one_process(rodfem, tmp_path):
+    """viscoelastic-cantilever-2d run by mpirun -n 2 to t = 0.06 (its last checkpoint at step 4) and
+    resumed by one process to t = 0.12 leaves every file of the serial uninterrupted run to 1e-12 of
+    each array's scale (the two ranks' assembly sums in another order; measured 1e-14), `dissipated`
+    carried over: the energy balance holds over the restart."""
+    scene, params = RESUMED["viscoelastic-cantilever-2d"]
+    params = {**params, "frames": 100}        # every level a frame, whatever t_end
+    full, part = tmp_path / "full", tmp_path / "part"
+    run_to_the_end(scene, params, full)
+    sets = [x for k, v in {**COMMON, **params, "t_end": 0.06}.items() for x in ("--set", f"{k}={v}")]
+    ok(rodfem("run", scene, *sets, "--quiet", "--out", part, np=2, timeout=300))
+    with open(part / "summary.json") as f:
+        assert json.load(f)["mpi_ranks"] == 2
+    run_to_the_end(scene, {"t_end": 0.12}, part, resume=str(part))
+    diffs = same_run(full, part, rtol=1e-12)
+    consistent(part, 4)
+    print({k: v for k, v in diffs.items() if v})
 
 
 if __name__ == "__main__":  # pragma: no cover
