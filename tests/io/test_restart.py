@@ -273,6 +273,9 @@ RESUMED = {
     "soft-arm-swing": ("soft-arm-swing",                           # 3D rod, a chamber and a tendon in turn
                        dict(n_elements=3, dt=0.05, t_end=0.6, t_on=0.1)),
     "driven-hub-arm": (driven_hub_arm(), {}),                      # two bodies, a driven joint, dissipation
+    "four-particle": ("four-particle", dict(dt=0.05, t_end=0.6)),  # springs, a damper, links; discrete gradient
+    "robot-arm-control": ("robot-arm-control",                     # PD at the hub: a moving set point
+                          dict(n_elements=4, dt=0.05, t_end=0.6, t_move=0.5)),
 }
 COMMON = dict(checkpoint_every=4, frames=7)
 # how a run stops: checkpoint_every, the step after which it stops, how, the step its summary.json names
