@@ -82,7 +82,7 @@ def torsional_spring(k):
 
 def damper(eta):
     """A damper on the relative velocity, force eta (v_b - v_a); eta a number or a function
-    eta(a, b) of the points' frames at the step's midpoint.  It resists every relative motion,
+    eta(d) of the relative position d = x_b - x_a at the step's midpoint.  It resists every relative motion,
     a rigid rotation of the pair too (the four-particle example's damper); `dashpot` does not."""
     return resistance(separation, eta, "damper")
 
@@ -90,8 +90,8 @@ def damper(eta):
 def dashpot(c):
     """A dashpot along the line between the points: force c (e . (v_b - v_a)) e, e = (x_b - x_a)/|x_b - x_a|
     (objective: a rigid rotation of the pair dissipates nothing).  As a damper on the rate of the
-    squared length, eta = c / (4 |x_b - x_a|^2) at the step's midpoint."""
-    return resistance(squared_length, lambda a, b: c / (4.0 * float((b.x - a.x) @ (b.x - a.x))), "dashpot")
+    squared length c2 = |x_b - x_a|^2, eta = c / (4 c2) at the step's midpoint."""
+    return resistance(squared_length, lambda length2: c / (4.0 * length2), "dashpot")
 
 
 def rotational_damper(eta):
@@ -101,7 +101,7 @@ def rotational_damper(eta):
 
 def length_dependent(eta0, alpha):
     """eta = eta0 (1 + alpha |x_b - x_a|^2) (the four-particle example's damper)."""
-    return lambda a, b: eta0 * (1.0 + alpha * float((b.x - a.x) @ (b.x - a.x)))
+    return lambda d: eta0 * (1.0 + alpha * float(d @ d))
 
 
 # -- controllers at a port (Ortega, van der Schaft, Maschke, Escobar, Automatica 38 (2002)) ------

@@ -128,6 +128,10 @@ class Linearization:
     def __init__(self, problem, reference=None):
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
+        if getattr(problem, "components", None):
+            names = ", ".join(c.name for c in problem.components[:3]) + (", ..." if len(problem.components) > 3 else "")
+            raise ParameterError(f"linearize and modes do not take springs, dampers or controllers yet ({names}); "
+                                 "use run or static")
         self.problem = problem
         self.system = problem.named_bodies
         problem.build()

@@ -164,7 +164,7 @@ class Statics:
         compiled = compile_forms(forms)
         blocks = [BodyBlock(compiled[(name, "F")], compiled[(name, "J")], body.x1, body.bcs)
                   for name, body in self.bodies]
-        self.joint_rows = StaticJointRows(target.points) if target.joints else None
+        self.joint_rows = StaticJointRows(target.points) if (target.joints or getattr(target, "components", None)) else None
         self.assembler = BlockAssembler(target.layout, blocks, self.joint_rows)
         self.newton = Newton(assembler=self.assembler, options=dict(OPTIONS, **(options or {})), prefix=PREFIX)
         self.unknown = self.assembler.vector

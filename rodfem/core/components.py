@@ -28,7 +28,7 @@ exactly (the engine finds the quadratic form by polarization and refuses any oth
   D^3 psi(xi_m)[dxi, dxi, dxi] / 24, as in rodfem/core/integrators.py.
 
 * A `Resistance` is a damper: the force eta G(q_m)^T G(q_m) v_m on the momentum rows, with a
-  coefficient eta(a_m, b_m) >= 0 that may depend on the midpoint configuration (R(x) of the
+  coefficient eta(xi(q_m)) >= 0 that may depend on the measure at the midpoint (R(x) of the
   PH-DAE).  It dissipates h d_n = h eta |G(q_m) v_m|^2 >= 0 in the step (the `dissipated` column).
 
 The energy functions psi are plain functions of numbers (written with numpy): the engine
@@ -239,10 +239,12 @@ class Resistance(Component):
         self.eta(self.q_initial)
 
     def eta(self, q) -> float:
-        """The coefficient at the configuration q (checked: finite and >= 0)."""
+        """The coefficient eta(xi(q)) at the configuration q (checked: finite and >= 0)."""
+        return self.coefficient_of(self.xi(q))
+
+    def coefficient_of(self, xi) -> float:
         if callable(self.coefficient):
-            fa, fb = self.frames
-            value = self.coefficient(fa(q[: self.na]), fb(q[self.na:]))
+            value = self.coefficient(xi[0] if self.m == 1 else xi)
         else:
             value = self.coefficient
         value = np.asarray(value, dtype=float)
@@ -263,8 +265,8 @@ class Resistance(Component):
         r_v = eta * Gm.T @ rate
         dr_dv = 0.5 * eta * Gm.T @ Gm
         dr_dq = 0.5 * eta * (np.einsum("k,kij->ij", rate, self.Q) + Gm.T @ np.einsum("kij,j->ki", self.Q, vm))
-        if callable(self.coefficient):   # d eta / d q1 by central differences
-            deta = _differences(self.eta, qm, 1e-7)
+        if callable(self.coefficient):   # d eta / d q1 = eta'(xi_m) G_m / 2, eta' by central differences
+            deta = _differences(self.coefficient_of, self.xi(qm), 1e-7) @ Gm
             dr_dq += 0.5 * np.outer(Gm.T @ rate, deta)
         return r_v, dr_dq, dr_dv, 0.0, h * eta * float(rate @ rate)
 
@@ -358,7 +360,7 @@ def potential(measure: Callable, energy: Callable, label: str = "potential", tim
 
 def resistance(measure: Callable, coefficient: Union[float, Callable], label: str = "damper") -> Law:
     """A damper on the rate of the quadratic measure xi(a, b, a0, b0), with the coefficient eta
-    (a number, or a function eta(a, b) of the two points' frames at the step's midpoint)."""
+    (a number, or a function eta(xi) of the measure at the step's midpoint)."""
     return Law("resistance", measure, coefficient, label)
 
 

@@ -229,3 +229,36 @@ def test_four_particle_converges_with_the_authors_orders():
               for h in (0.01, 0.005)]
     orders = np.log2(np.array(errors[0]) / np.array(errors[1]))
     assert 1.8 <= orders[0] <= 2.2 and 1.8 <= orders[1] <= 2.3 and 0.9 <= orders[2] <= 1.2, orders
+
+
+@pytest.mark.parametrize("law", ["hookean", "quartic"])
+def test_spring_damper_chain_statics_against_the_column_equations(law):
+    """spring-damper-chain at rest: the boxes only move down, and each gap's four springs carry the
+    weight below them less the floor's pull: T_i - T_{i+1} = m g with the springs' tension
+    T(l) = 4 psi'(l^2) 2 l (hookean 4 k (l - l0), quartic 8 k l (l^2 - l0^2)) of the gap lengths
+    l_i, whose sum is fixed by ceiling and floor; solved here as a small nonlinear system."""
+    from scipy.optimize import fsolve
+
+    from rodfem.demos.spring_damper_chain import layout
+    scene = load("spring-damper-chain")
+    p = scene.values({"n_bodies": 3, "law": law, "push": 0.0, "spin": 0.0})
+    system = scene.build(p, MPI.COMM_WORLD)
+    statics.solve(system, 0.0, steps=2)
+    m, g, k, l0, b, n = p["mass"], p["g"], p["k"], p["rest_length"], p["b"], p["n_bodies"]
+    centres, floor = layout(p)
+
+    def tension(length):
+        return 4 * k * (length - l0) if law == "hookean" else 8 * k * length * (length**2 - l0**2)
+
+    def equations(z):      # z: the centres
+        tops = np.concatenate([[0.0], z - b / 2])            # ceiling, then the boxes' bottoms
+        bottoms = np.concatenate([z + b / 2, [floor]])       # the boxes' tops, then the floor
+        T = tension(tops - bottoms)
+        return T[:-1] - T[1:] - m * g
+    z = fsolve(equations, np.array(centres), xtol=1e-12)
+    assert np.max(np.abs(equations(z))) <= 1e-9
+    for i in range(n):
+        x = state(system, f"box{i + 1}", "x")
+        assert x[2] == pytest.approx(z[i], abs=1e-10)
+        assert np.max(np.abs(x[:2])) <= 1e-12
+    assert abs(z[0] - centres[0]) > 0.01          # gravity moved them
