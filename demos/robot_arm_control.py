@@ -19,6 +19,11 @@
 # only at the hub, so the flexible modes are damped through the arm's
 # coupling to the hub; kd near sqrt(kp J_hub)-ish damps them well.
 #
+# `controller=pid` adds integral action, u = -kp e - ki z - kd omega(0),
+# z' = e = phi(0) - r: the integral z is the controller's own state (kept
+# in the checkpoint); integral action is not passive, so its work is in
+# `supplied` and the closed loop's energy need not decrease.
+#
 # `controller=law` runs the same PD law as plain Python, u = law(t, phi,
 # omega) (rodfem.forms.components.control_law): the input is read at the
 # step midpoints and its work h u omega_m is recorded in `supplied`.  The
@@ -33,6 +38,7 @@
 #
 # Run it:  rodfem run robot-arm-control --out results/robot-arm-control
 #          rodfem run robot-arm-control --set controller=law --out results/robot-arm-law
+#          rodfem run robot-arm-control --set controller=pid --out results/robot-arm-pid
 import sys
 
 import numpy as np
@@ -42,7 +48,7 @@ from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 from rodfem.core.joints import ground
 from rodfem.demos._multibody import nodal
-from rodfem.forms.components import control_law, pd_control, rest_to_rest
+from rodfem.forms.components import control_law, pd_control, pid_control, rest_to_rest
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 
 parameters = common(n_elements=8, dt=0.01, t_end=6.0) + [
@@ -56,8 +62,9 @@ parameters = common(n_elements=8, dt=0.01, t_end=6.0) + [
     Parameter("t_move", 1.5, "s", "duration of the set point's rest-to-rest move", low=0),
     Parameter("kp", 20.0, "N m/rad", "proportional gain (stiffness of the virtual spring)", low=0),
     Parameter("kd", 5.0, "N m s/rad", "derivative gain (damping injected at the hub)", low=0),
-    Parameter("controller", "pd", "", "PD as a virtual spring and damper, or the same law in Python",
-              choices=("pd", "law")),
+    Parameter("ki", 5.0, "N m/(rad s)", "integral gain (controller=pid)", low=0),
+    Parameter("controller", "pd", "", "PD as a virtual spring and damper, the same law in Python, or PID",
+              choices=("pd", "law", "pid")),
 ]
 
 
@@ -73,6 +80,8 @@ def build(p, comm):
     r = rest_to_rest(0.0, p["angle"], 0.0, p["t_move"])
     if p["controller"] == "pd":
         arm.connect(pd_control(p["kp"], p["kd"], r), ground((0.0, 0.0)), beam.start, name="hub")
+    elif p["controller"] == "pid":
+        arm.connect(pid_control(p["kp"], p["ki"], p["kd"], r), ground((0.0, 0.0)), beam.start, name="hub")
     else:
         def law(t, phi, omega):
             return -p["kp"] * (phi - r(t)) - p["kd"] * omega

@@ -132,3 +132,28 @@ def rest_to_rest(start, end, t0, t1):
         s = min(max((t - t0) / (t1 - t0), 0.0), 1.0) if t1 > t0 else 1.0
         return start + (end - start) * s**3 * (10 - 15 * s + 6 * s**2)
     return r
+
+
+class PID:
+    """PID control of the measure towards r(t): u = -kp e - ki z - kd xi', e = xi - r(t), z' = e (the
+    derivative acts on the measurement, so a set-point step gives no kick).  The integral z is the
+    controller's state; the midpoint rule gives z_{n+1} = z_n + h e_{n+1/2} and the input of a step
+    uses z_{n+1/2} = z_n + h/2 e_{n+1/2}.  The integral action is not passive: its work is in
+    `supplied`, and `state` (z) is kept in the checkpoint."""
+
+    def __init__(self, kp, ki, kd, set_point=0.0):
+        self.kp, self.ki, self.kd = float(kp), float(ki), float(kd)
+        self.r = set_point if callable(set_point) else (lambda t, value=float(set_point): value)
+        self.state = [0.0]
+
+    def u(self, t, xi, rate, h):
+        e = xi - self.r(t)
+        return -self.kp * e - self.ki * (self.state[0] + 0.5 * h * e) - self.kd * rate
+
+    def advance(self, t, xi, rate, h):
+        self.state = [self.state[0] + h * (xi - self.r(t))]
+
+
+def pid_control(kp, ki, kd, set_point=0.0, measure=relative_angle):
+    """PID control at a port (default measure: the relative angle): `PID` as a control law."""
+    return feedback(measure, PID(kp, ki, kd, set_point), "PID")

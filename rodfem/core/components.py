@@ -275,32 +275,47 @@ class Feedback(Component):
     """A control law at a port: the input u = law(t, xi, xi') (generalized forces along the measure,
     m numbers) acts on the points as G^T u, read at the step's midpoint t_m, xi(q_m), G(q_m) v_m, and
     supplies the work h u . xi'_m = u . (xi_{n+1} - xi_n) (exact: xi is quadratic).  Any Python
-    function: Newton's matrix takes its derivatives by differences."""
+    function: Newton's matrix takes its derivatives by differences.
+
+    A law with a state of its own (a controller's integrator, forms/components.py: `PID`) is an
+    object with `u(t, xi, rate, h)` (the input at the step's midpoint, from its state at t_n),
+    `advance(t, xi, rate, h)` (its state at t_{n+1}, once the step is accepted) and `state` (a list
+    of numbers: checkpointed with the run)."""
     dissipative = False
 
     def __init__(self, measure: Callable, law: Callable, a: Point, b: Point, name: str):
         super().__init__(measure, a, b, name)
         self.law = law
+        self.stateful = hasattr(law, "advance")
 
-    def u(self, t, xi, rate):
-        value = np.atleast_1d(np.asarray(self.law(t, xi[0] if self.m == 1 else xi,
-                                                  rate[0] if self.m == 1 else rate), dtype=float))
+    def u(self, t, xi, rate, h=0.0):
+        x, r = (xi[0], rate[0]) if self.m == 1 else (xi, rate)
+        value = self.law.u(t, x, r, h) if self.stateful else self.law(t, x, r)
+        value = np.atleast_1d(np.asarray(value, dtype=float))
         if value.shape != (self.m,) or not np.all(np.isfinite(value)):
             raise ConstraintError(f"{self.describe()}: the control law must return {self.m} finite "
                                   f"number(s) (got {value.tolist()} at t = {t:g})")
         return value
+
+    def advance(self, q0, q1, v0, v1, h, t0, t1):
+        """The law's state at t_{n+1} (a stateful law), from the accepted step."""
+        if self.stateful:
+            qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
+            xi, rate = self.xi(qm), self.G(qm) @ vm
+            self.law.advance(0.5 * (t0 + t1), xi[0] if self.m == 1 else xi, rate[0] if self.m == 1 else rate, h)
 
     def bind(self, *args, **kwargs):
         super().bind(*args, **kwargs)
         self.u(0.0, self.xi(self.q_initial), np.zeros(self.m))
 
     def observe(self, q1, v1, t1, q0, v0, t0):
-        """`name.u1 ...`: the input of the last step (at its midpoint; at t = 0 the law at the state)."""
-        if q0 is None:
-            q, v, t = q1, v1, t1
+        """`name.u1 ...`: the input of the last step (at its midpoint; at t = 0 the law at the state);
+        read before the step is accepted, so a stateful law still has its state at t_n."""
+        if q0 is None or t1 == t0:
+            q, v, t, h = q1, v1, t1, 0.0
         else:
-            q, v, t = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1)
-        u = self.u(t, self.xi(q), self.G(q) @ v)
+            q, v, t, h = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1), t1 - t0
+        u = self.u(t, self.xi(q), self.G(q) @ v, h)
         return {f"{self.name}.u{i + 1}": float(x) for i, x in enumerate(u)}
 
     def at_rest(self, q, t=0.0):
@@ -313,9 +328,9 @@ class Feedback(Component):
         qm, vm, tm = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1)
         Gm = self.G(qm)
         xim, rate = self.xi(qm), Gm @ vm
-        u = self.u(tm, xim, rate)
-        du_dxi = _differences(lambda x: self.u(tm, x, rate), xim, 1e-7)
-        du_drate = _differences(lambda r: self.u(tm, xim, r), rate, 1e-7)
+        u = self.u(tm, xim, rate, h)
+        du_dxi = _differences(lambda x: self.u(tm, x, rate, h), xim, 1e-7)
+        du_drate = _differences(lambda r: self.u(tm, xim, r, h), rate, 1e-7)
         drate_dq = 0.5 * np.einsum("kij,j->ki", self.Q, vm)
         r_v = -Gm.T @ u
         dr_dq = -(0.5 * np.einsum("k,kij->ij", u, self.Q) + Gm.T @ (0.5 * du_dxi @ Gm + du_drate @ drate_dq))

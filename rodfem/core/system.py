@@ -317,7 +317,9 @@ class System:
         return self.newton.solve(step, t)
 
     def accept(self):
-        """x_n <- x_{n+1}; returns the old x_n (for the next prediction)."""
+        """x_n <- x_{n+1} (and the control laws' states); returns the old x_n (for the next prediction)."""
+        if any(getattr(c, "stateful", False) for c in self.components):
+            self.points.advance(self.X0, self.X1)
         previous = self.X0.getArray(readonly=True).copy()
         self.X1.copy(self.X0)
         self._push(self.X0, "x0")
@@ -460,6 +462,18 @@ class PointIndex:
     def step(self, X0, t0, t1, h):
         """The step from x_n (X0) at t0 to t1 = t0 + h."""
         self.x0_values, self.times = self.values(X0), (t0, t1, h)
+
+    def advance(self, X0, X1):
+        """The stateful control laws' states at t_{n+1} (computed on rank 0, then the same on every rank)."""
+        v0, v1 = self.values(X0), self.values(X1)
+        t0, t1, h = self.times
+        stateful = [c for c in self.components if getattr(c, "stateful", False)]
+        if self.comm.rank == 0:
+            for c in stateful:
+                c.advance(v0[c.q_at], v1[c.q_at], v0[c.v_at], v1[c.v_at], h, t0, t1)
+        states = self.comm.bcast([list(c.law.state) for c in stateful], root=0)
+        for c, state in zip(stateful, states):
+            c.law.state = list(state)
 
     def stored_energy(self, X) -> float:
         """The springs' stored energy sum V(q, t) at the state X, t = t_{n+1} of the last step (collective;

@@ -223,13 +223,18 @@ def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
         data["previous"] = _pack(problem, parrays, comm)
         data["previous_lam"] = _gather_lam(comm, plam)
     info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=n * dt, dt=dt, H=H, supplied=supplied,
-                dissipated=dissipated,
+                dissipated=dissipated, control_states=_control_states(problem),
                 has_previous=previous is not None, mpi_ranks=comm.size,
                 linear_solver=lu_name(problem.newton.settings))
     if hasattr(out, "do"):
         out.do("write the checkpoint", _write, out.path, info, data)
     elif comm.rank == 0:
         _write(out, info, data)
+
+
+def _control_states(problem):
+    """The states of the stateful control laws (forms/components.py: PID's integral), by name."""
+    return {c.name: list(c.law.state) for c in getattr(problem, "components", ()) if getattr(c, "stateful", False)}
 
 
 def _write(out, info, data):
@@ -313,6 +318,12 @@ def restore(problem, meta, arrays):
         problem.newton.use_lu(solver)
         problem.newton.restart()
     comm.Barrier()
+    saved = meta.get("control_states", {})
+    for c in getattr(problem, "components", ()):
+        if getattr(c, "stateful", False):
+            if c.name not in saved or len(saved[c.name]) != len(c.law.state):
+                raise ParameterError(f"the checkpoint has no state of the control law {c.name}: it cannot be resumed")
+            c.law.state = [float(x) for x in saved[c.name]]
     problem.t = float(meta["t"])
     return SimpleNamespace(step=int(meta["step"]), H=float(meta["H"]), supplied=float(meta["supplied"]),
                            dissipated=float(meta.get("dissipated", 0.0)), previous=previous, t=float(meta["t"]))

@@ -274,8 +274,8 @@ RESUMED = {
                        dict(n_elements=3, dt=0.05, t_end=0.6, t_on=0.1)),
     "driven-hub-arm": (driven_hub_arm(), {}),                      # two bodies, a driven joint, dissipation
     "four-particle": ("four-particle", dict(dt=0.05, t_end=0.6)),  # springs, a damper, links; discrete gradient
-    "robot-arm-control": ("robot-arm-control",                     # PD at the hub: a moving set point
-                          dict(n_elements=4, dt=0.05, t_end=0.6, t_move=0.5)),
+    "robot-arm-control": ("robot-arm-control",                     # PID at the hub: a moving set point, an integral
+                          dict(n_elements=4, dt=0.05, t_end=0.6, t_move=0.5, controller="pid")),
 }
 COMMON = dict(checkpoint_every=4, frames=7)
 # how a run stops: checkpoint_every, the step after which it stops, how, the step its summary.json names

@@ -6,11 +6,11 @@ import pytest
 from mpi4py import MPI
 from processes import assert_same_history, serial_and_parallel
 
-from rodfem import System, run
+from rodfem import Load, System, run
 from rodfem.app.scene import load
 from rodfem.core.joints import ground
 from rodfem.forms import joints
-from rodfem.forms.components import control_law, pd_control, rest_to_rest
+from rodfem.forms.components import control_law, pd_control, pid_control, rest_to_rest
 from rodfem.forms.rigid_body import PlanarRigidBody
 
 TIGHT = {"snes_atol": 1e-12, "snes_rtol": 1e-14}
@@ -118,3 +118,35 @@ def test_mpi_two_ranks_match_serial(tmp_path, scene, args):
     hub on one of them; the particles shared out) give the serial history."""
     serial, parallel, _ = serial_and_parallel(tmp_path, ["run", scene, *args])
     assert_same_history(serial, parallel, rtol=1e-9)
+
+
+@pytest.mark.parametrize("ki", [0.0, 4.0], ids=["pd", "pid"])
+def test_pid_rejects_a_constant_disturbance_by_the_recurrence(ki):
+    """A wheel held at theta* = 0.3 against a constant disturbance moment M by PID: the midpoint
+    recurrence of J w' = -kp e - ki z - kd w + M, theta' = w, z' = e (linear: one 3x3 solve a step)
+    to round-off; at the end PID has removed the offset (|e| <= 1e-3) while PD (ki = 0) keeps the
+    offset M / kp."""
+    J, kp, kd, M, target, h, n = 0.4, 6.0, 1.5, 0.9, 0.3, 0.05, 400
+    s = System(newton_options=TIGHT)
+    wheel = s.add("wheel", PlanarRigidBody(2.0, J), initial=PlanarRigidBody.initial((0.0, 0.0)),
+                  loads=[Load("omega", M, "domain", "disturbance")])
+    s.join(joints.pin, ground((0.0, 0.0)), wheel.point())
+    s.connect(pid_control(kp, ki, kd, target), ground((0.0, 0.0)), wheel.point(), name="hub")
+    result = run(s, h, n * h)
+    # [theta, w, z]_{n+1}: A1 x1 = A0 x0 + c, from the three midpoint equations
+    # (z_{n+1/2} = z_n + h/2 e_m = (z_n + z_{n+1})/2)
+    A1 = np.array([[1.0, -h / 2, 0.0], [h / 2 * kp, J + h / 2 * kd, h / 2 * ki], [-h / 2, 0.0, 1.0]])
+    A0 = np.array([[1.0, h / 2, 0.0], [-h / 2 * kp, J - h / 2 * kd, -h / 2 * ki], [h / 2, 0.0, 1.0]])
+    c = np.array([0.0, h * (M + kp * target), -h * target])
+    x = np.zeros(3)
+    for _ in range(n):
+        x = np.linalg.solve(A1, A0 @ x + c)
+    body = s.body("wheel")
+    theta = body.space.nodal(body.x0, "phi")[1].item()
+    assert theta == pytest.approx(x[0], abs=1e-11)
+    assert s.components[0].law.state[0] == pytest.approx(x[2], abs=1e-11)
+    if ki:
+        assert abs(theta - target) <= 1e-3
+    else:
+        assert theta - target == pytest.approx(M / kp, rel=1e-6)
+    assert np.max(np.abs(column(result, "balance_error"))) <= 1e-12
