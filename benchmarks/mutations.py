@@ -47,6 +47,8 @@ class Mutation:
 
 M = Mutation
 JOINTS_3D = "tests/models/test_joint_oracles.py::test_joint_between_two_tumbling_bodies_holds_its_definition"
+COMPONENTS = "tests/models/test_components.py"
+CONTROL = "tests/models/test_control.py"
 JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
@@ -394,6 +396,47 @@ MUTATIONS = [
       [('previous = vector("previous") if meta.get("has_previous") else None', "previous = None")],
       ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-2d-killed-two-steps-after-a-checkpoint]"],
       "the restart drops x_{n-1}: Newton starts from x_n, the resumed run differs at Newton's tolerance, not to the bit"),
+    # -- components and controllers (issue 23) --
+    M("component-dg-is-midpoint", "rodfem/core/components.py",
+      [("        return grad + (bracket / n2 if n2 > 0 else 0.0) * dxi, psi.hessian(xi_bar)",
+        "        return grad, psi.hessian(xi_bar)")],
+      [f"{COMPONENTS}::test_discrete_gradient_balance_to_round_off_and_momenta_conserved[hookean]",
+       f"{COMPONENTS}::test_discrete_gradient_balance_to_round_off_and_momenta_conserved[tension-only]"],
+      "a spring's discrete gradient without Gonzalez' correction (the gradient at the mean measure: "
+      "exact for the quartic spring, quadratic in c, not for the Hookean one)"),
+    M("damper-dissipation-halved", "rodfem/core/components.py",
+      [("return r_v, dr_dq, dr_dv, 0.0, h * eta * float(rate @ rate)",
+        "return r_v, dr_dq, dr_dv, 0.0, 0.5 * h * eta * float(rate @ rate)")],
+      [f"{COMPONENTS}::test_mass_on_a_spring_follows_the_midpoint_recurrence[damper-midpoint]"],
+      "a damper books half the energy it takes out in `dissipated`"),
+    M("dashpot-coefficient-not-normalized", "forms/components.py",
+      [("lambda length2: c / (4.0 * length2)", "lambda length2: c / 4.0")],
+      [f"{COMPONENTS}::test_mass_on_a_spring_follows_the_midpoint_recurrence[dashpot-midpoint]"],
+      "the dashpot's coefficient not divided by |d|^2: a length-dependent damping, energy-consistent"),
+    M("moving-set-point-work-dropped", "rodfem/core/components.py",
+      [("            work = (after(xi1) - psi(xi1)) + (psi(xi0) - before(xi0))",
+        "            work = 0.0 * ((after(xi1) - psi(xi1)) + (psi(xi0) - before(xi0)))")],
+      [f"{CONTROL}::test_robot_arm_reaches_the_set_angle_and_stops_vibrating"],
+      "a PD's moving set point supplies work that is not booked (balance off while it moves)"),
+    M("control-law-rate-at-x1", "rodfem/core/components.py",
+      [("        xim, rate = self.xi(qm), Gm @ vm\n        u = self.u(tm, xim, rate, h)",
+        "        xim, rate = self.xi(qm), Gm @ v1\n        u = self.u(tm, xim, rate, h)")],
+      [f"{CONTROL}::test_pd_on_a_wheel_follows_the_recurrence[midpoint-law]"],
+      "a Python control law reads the rate at t_{n+1}, not the midpoint (first order, its work wrong)"),
+    M("pid-integral-not-advanced", "forms/components.py",
+      [("        self.state = [self.state[0] + h * (xi - self.r(t))]", "        self.state = list(self.state)")],
+      [f"{CONTROL}::test_pid_rejects_a_constant_disturbance_by_the_recurrence[pid]"],
+      "the PID's integral never advances (a PD with a constant offset)"),
+    M("checkpoint-without-control-states", "rodfem/io/checkpoint.py",
+      [("            c.law.state = [float(x) for x in saved[c.name]]", "            pass")],
+      ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run"
+       "[robot-arm-control-killed-two-steps-after-a-checkpoint]"],
+      "a resumed PID run starts its integral from zero"),
+    M("springs-not-in-statics", "rodfem/analysis/statics.py",
+      [('if (target.joints or getattr(target, "components", None)) else None', "if target.joints else None")],
+      [f"{COMPONENTS}::test_spring_damper_chain_statics_against_the_column_equations[hookean]"],
+      "statics leaves out the springs of a system without joints"),
+
 ]
 
 

@@ -57,19 +57,21 @@ def cayley(m, c, k, h, x0, v0, n):
 
 
 @pytest.mark.parametrize("rule", RULES)
-@pytest.mark.parametrize("eta", [0.0, 0.8], ids=["undamped", "damped"])
-def test_mass_on_a_spring_follows_the_midpoint_recurrence(rule, eta):
+@pytest.mark.parametrize("eta, kind", [(0.0, None), (0.8, damper), (0.8, dashpot)],
+                         ids=["undamped", "damper", "dashpot"])
+def test_mass_on_a_spring_follows_the_midpoint_recurrence(rule, eta, kind):
     """A mass m on a Hookean spring (rest length l0, psi = k/2 (sqrt(c) - l0)^2 of the squared
     length c) to the ground, with a damper, moving along the spring's axis: m x'' + eta x' + k (x - l0)
     = 0.  Along a line the discrete gradient in c is the difference quotient of V(x) = k/2 (x - l0)^2,
     i.e. the midpoint gradient: both rules reproduce the Cayley recurrence to round-off, and the
-    dissipated work is its sum h eta v_{n+1/2}^2."""
+    dissipated work is its sum h eta v_{n+1/2}^2 (a damper on the relative velocity or a dashpot
+    along the line: the same force along the axis)."""
     m, k, l0, h, n = 2.0, 50.0, 1.0, 0.05, 60
     s = System(integrator=rule, newton_options=TIGHT)
     body = s.add("mass", PointMass(m, dim=3), initial=PointMass.initial((1.3, 0.0, 0.0), (0.4, 0.0, 0.0)))
     s.connect(spring(hookean(k, l0)), ground((0.0, 0.0, 0.0)), body.point())
-    if eta:
-        s.connect(damper(eta), ground((0.0, 0.0, 0.0)), body.point())
+    if eta:    # along the axis the dashpot's force c (e . v) e is the damper's c v
+        s.connect(kind(eta), ground((0.0, 0.0, 0.0)), body.point())
     result = run(s, h, n * h)
     exact, lost = cayley(m, eta, k, h, 0.3, 0.4, n)
     assert state(s, "mass", "x")[0] - l0 == pytest.approx(exact[-1, 0], abs=1e-12)
