@@ -49,7 +49,8 @@ def misalignment(a, b, a0, b0):
 
 def quartic(k, rest_length):
     """psi(c) = k/2 (c - l0^2)^2: the spring of Kinon, Morandin, Schulze's four-particle example
-    (small-stretch stiffness 4 k l0^2)."""
+    (small-stretch stiffness 4 k l0^2).  Quadratic in c, so its discrete gradient in c is psi'(c_bar)
+    at the mean c_bar = (c_n + c_{n+1})/2 -- but not psi'(c(q_m)), the midpoint rule's."""
     return lambda c: 0.5 * k * (c - rest_length**2) ** 2
 
 

@@ -80,9 +80,13 @@ def sweep(p, dts=None, elements=None, levels=DEFAULT_LEVELS):
     """The refinement paths: dict name -> list of (n_elements, dt); the sweep's dts and elements; and
     notes saying what a single --dt or --elements value means: the fixed value of the other path
     (one value of each: a single run)."""
-    n0, dt0, notes = int(p["n_elements"]), float(p["dt"]), []
+    if "n_elements" not in p:   # no flexible body (four-particle, spring-damper-chain): a dt path only
+        if elements:
+            raise ParameterError("--elements: this scene has no n_elements (no flexible body); study it along --dt")
+        elements = [1]
+    n0, dt0, notes = int(p.get("n_elements", 1)), float(p["dt"]), []
     one_n, one_dt = bool(elements) and len(set(elements)) == 1, bool(dts) and len(set(dts)) == 1
-    if one_n and not one_dt:
+    if one_n and not one_dt and "n_elements" in p:
         n0 = int(elements[0])
         notes.append(f"--elements {n0}: one value, the element count of the dt path (an n path needs two or more)")
     if one_dt and not one_n:
@@ -122,11 +126,16 @@ def check_runs(scene, p, points, reference=None, ref_factor=REF_FACTOR, comm=MPI
     for n, what in sorted({(n, what) for n, _, what, _ in runs}):
         try:
             with limits.checking():
-                scene.build(scene.values(dict(p, n_elements=n)), comm)
+                scene.build(scene.values(_at(p, n)), comm)
         except limits.Checked:
             pass
         except InputError as e:
             raise ParameterError(f"{what}: {e}") from None
+
+
+def _at(p, n):
+    """The parameters p with n elements (unchanged for a scene without n_elements)."""
+    return dict(p, n_elements=n) if "n_elements" in p else dict(p)
 
 
 # -- running --------------------------------------------------------------------
@@ -134,7 +143,7 @@ def check_runs(scene, p, points, reference=None, ref_factor=REF_FACTOR, comm=MPI
 def _run(scene, p, n, dt, repeats=1):
     """One run; returns a record (never raises NewtonFailure)."""
     from rodfem.app.driver import run_scene
-    overrides = dict(p, n_elements=n, dt=dt)
+    overrides = dict(_at(p, n), dt=dt)
     rec = _record(p, n, dt)
     best = None
     for _ in range(max(1, repeats)):
@@ -221,7 +230,7 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
 
     analytic = scene.reference(p) if scene.reference else None
     points = list(dict.fromkeys(pt for pts in paths.values() for pt in pts))
-    reference = None if analytic else (ref_factor * max(n for n, _ in points),
+    reference = None if analytic else (ref_factor * max(n for n, _ in points) if "n_elements" in p else 1,
                                        min(dt for _, dt in points) / ref_factor)
     check_runs(scene, p, points, reference, ref_factor)
     runs = {}
@@ -249,7 +258,8 @@ def run_study(scene_name, overrides=None, out=None, dts=None, elements=None, rep
     else:
         n_ref, dt_ref = reference
         ref_desc = (f"no analytic solution: a run refined far beyond the sweep, n_elements = {n_ref}, "
-                    f"dt = {dt_ref:g} ({ref_factor}x the finest of the sweep in each)")
+                    f"dt = {dt_ref:g} ({ref_factor}x the finest of the sweep in each)" if "n_elements" in p else
+                    f"no analytic solution: a run with dt = {dt_ref:g} ({ref_factor}x finer than the sweep's finest)")
         say(f"reference: {ref_desc}")
     try:
         if reference:

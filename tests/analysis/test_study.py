@@ -112,3 +112,15 @@ def test_finished_runs_are_kept_when_a_later_one_fails(tmp_path, capsys, monkeyp
     assert rows[0.05]["status"] == rows[0.025]["status"] == "completed" and float(rows[0.025]["error"]) > 0
     assert rows[0.0125]["status"] == "error" and "disk is full" in rows[0.0125]["failure"]
     assert json.loads((tmp_path / "study.json").read_text())["status"] == "error"
+
+
+def test_a_scene_without_elements_is_studied_along_dt(tmp_path, capsys):
+    """four-particle has no n_elements: study runs the dt path (second order: the springs' discrete
+    gradient and the midpoint kinematics) and refuses --elements in one line."""
+    from rodfem.errors import ParameterError
+    study = run_study("four-particle", {"t_end": 0.5}, out=str(tmp_path / "s"), dts=[0.02, 0.01, 0.005],
+                      plot=False, quiet=True)
+    assert list(study["paths"]) == ["dt"]
+    assert 1.8 <= study["orders"]["dt"]["order"] <= 2.6, study["orders"]
+    with pytest.raises(ParameterError, match="--elements: this scene has no n_elements"):
+        run_study("four-particle", {"t_end": 0.5}, out=str(tmp_path / "e"), elements=[2, 4], plot=False, quiet=True)
