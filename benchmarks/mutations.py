@@ -50,6 +50,7 @@ JOINTS_3D = "tests/models/test_joint_oracles.py::test_joint_between_two_tumbling
 COMPONENTS = "tests/models/test_components.py"
 CONTROL = "tests/models/test_control.py"
 JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
+LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -437,6 +438,31 @@ MUTATIONS = [
       [f"{COMPONENTS}::test_spring_damper_chain_statics_against_the_column_equations[hookean]"],
       "statics leaves out the springs of a system without joints"),
 
+
+
+    # -- linear models with components (issue 23) --
+    M("linear-spring-without-geometric-stiffness", "rodfem/core/components.py",
+      [('stiffness = G.T @ psi.hessian(xi, order=4) @ G + np.einsum("k,kij->ij", z, self.Q)',
+        "stiffness = G.T @ psi.hessian(xi, order=4) @ G")],
+      [f"{LINEAR_COMPONENTS}::test_taut_chain_frequencies[hookean]",
+       f"{LINEAR_COMPONENTS}::test_taut_chain_frequencies[quartic]"],
+      "a spring's linear stiffness without the geometric stiffness sum psi'_k Q_k of its pre-stress (no "
+      "transverse stiffness T/l, a wrong axial one)"),
+    M("linear-damper-missing-from-R", "rodfem/core/components.py",
+      [('"dv": eta * G.T @ G, "hessian": None}', '"dv": 0.0 * G.T @ G, "hessian": None}')],
+      [f"{LINEAR_COMPONENTS}::test_damped_mass_spring_eigenvalues",
+       f"{LINEAR_COMPONENTS}::test_pd_wheel_eigenvalues[pd_as_components]"],
+      "the dampers left out of the linear model (R = 0: undamped modes)"),
+    M("linear-feedback-without-rate-gain", "rodfem/core/components.py",
+      [('"dv": -G.T @ du_drate @ G, "hessian": None,', '"dv": 0.0 * du_drate[0, 0] * G.T @ G, "hessian": None,')],
+      [f"{LINEAR_COMPONENTS}::test_pd_wheel_eigenvalues[pd_in_python]",
+       f"{LINEAR_COMPONENTS}::test_a_law_that_feeds_energy_in_is_not_passive"],
+      "a control law's linearization without du/dxi' (the D of a PD law in Python lost)"),
+    M("linear-components-at-time-zero", "rodfem/analysis/linearize.py",
+      [("terms = c.linear(q, v, self.t)", "terms = c.linear(q, v, 0.0)")],
+      [f"{LINEAR_COMPONENTS}::test_a_moving_set_point_is_read_at_the_linearization_time[pd_as_components]",
+       f"{LINEAR_COMPONENTS}::test_a_moving_set_point_is_read_at_the_linearization_time[pd_in_python]"],
+      "timed energies and control laws read at t = 0, not at the time of the linearization (a moving set point)"),
 ]
 
 

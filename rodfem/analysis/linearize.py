@@ -54,6 +54,24 @@ replaced by the dense one up to `DENSE_FALLBACK_MAX` states, else refused.
 
 Serial only (the exported matrices are assembled on one rank).  Systems: the bodies' blocks
 and the joints' rows (module `Linearization`); a joint's drive is not an input of the linear model.
+
+Components (rodfem/core/components.py, `System.connect`), at the state and the time t of the
+linearization (a timed energy psi(xi, t), e.g. a PD set point, and a control law are read at t):
+
+* a spring V = psi(xi(q)) adds its force G^T psi' to the momentum rows and to the stiffness (the
+  columns q of A, hence Q_qq) and to Hess its Hessian G^T psi''(xi) G + sum_k psi'_k(xi) Q_k: its
+  own stiffness and the geometric stiffness of its pre-stress (a taut spring's transverse
+  stiffness T / l);
+* a damper adds eta(xi) G^T G to the velocity columns of A: since Q = I on the velocities, it
+  lands in R (symmetric, >= 0).  Only eta's value at the point matters about a rest state (its
+  force vanishes there with the velocity);
+* a control law u = law(t, xi, xi') (acting as -G^T u) enters A through its linearization
+  K = -du/dxi (a stiffness) and D = -du/dxi' (a damping), by differences.  A law is not port-
+  Hamiltonian in general: only when K is symmetric and D + D^T >= 0 is it a virtual spring and
+  damping injection (then A = (J - R) Q with R >= 0, E^T Q symmetric); otherwise A still holds the
+  true linearization but not in that form: `checks['passive']` is False, `checks['not_passive']`
+  names the laws, `feedback` holds each law's K, D and verdict (`EtQ_asymmetry` shows a
+  non-symmetric K; a negative D, R's indefinite part).
 """
 import numpy as np
 import scipy.sparse as sp
@@ -123,18 +141,20 @@ class Linearization:
 
     A System's state is its bodies' dofs in the order of the bodies, then the joints'
     multipliers; the joints add their reactions G(q)^T lambda to the momentum rows and their
-    rows G(q) v (rate form; E = 0) or g(q) - g_p (the pencil of modes)."""
+    rows G(q) v (rate form; E = 0) or g(q) - g_p (the pencil of modes); springs, dampers and
+    control laws their linearized forces (see the module docstring), read at time `t` (default:
+    the time of the last static solve or time step, else the problem's t)."""
 
-    def __init__(self, problem, reference=None):
+    def __init__(self, problem, reference=None, t=None):
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
-        if getattr(problem, "components", None):
-            names = ", ".join(c.name for c in problem.components[:3]) + (", ..." if len(problem.components) > 3 else "")
-            raise ParameterError(f"linearize and modes do not take springs, dampers or controllers yet ({names}); "
-                                 "use run or static")
         self.problem = problem
         self.system = problem.named_bodies
         problem.build()
+        points = getattr(problem, "points", None)
+        if t is None:   # the time of the last static solve or time step (the state's), else the problem's
+            t = points.times[1] if points is not None and points.x0_values is not None else getattr(problem, "t", 0.0)
+        self.t = float(t)
         bodies = problem.body_items()
         parts = []
         for name, body in bodies:
@@ -156,6 +176,9 @@ class Linearization:
         self.inputs = [(f"{p['name']}.{x}" if self.system else x) for p in parts for x in p["inputs"]]
         if self.system and self.problem.joints:
             self._joints(full, f0)
+        self.feedback = {}
+        if self.system and getattr(self.problem, "components", None):
+            self._components(full, f0)
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         self.free = np.concatenate([offsets[i] + p["free"] for i, p in enumerate(parts)]
                                    + [offsets[-1] + np.arange(n_lam)]).astype(int)
@@ -243,6 +266,40 @@ class Linearization:
             f0[li] -= G @ v
             self.joint_gap = max(getattr(self, "joint_gap", 0.0), float(np.max(np.abs(g))) if len(g) else 0.0)
 
+    def _components(self, full, f0):
+        """The springs', dampers' and control laws' terms at the System's state and time `t`
+        (rodfem/core/components.py, `linear`): -dr_v/dq and -dr_v/dv added to the momentum rows of
+        A and A_modes (the same rows in both), a spring's Hessian of V to Hess, -r_v to f0.  A control
+        law's linearization is recorded in `feedback` (name -> its stiffness K = -du/dxi, damping
+        D = -du/dxi' and whether they make it a passive element); see `ph_form`."""
+        x = self.problem.X0.getArray(readonly=True)
+        rows, cols, values, hrows, hcols, hvalues = [], [], [], [], [], []
+
+        def add(r_idx, c_idx, block, into):
+            R, C = np.meshgrid(r_idx, c_idx, indexing="ij")
+            into[0].append(R.ravel())
+            into[1].append(C.ravel())
+            into[2].append(np.asarray(block).ravel())
+        for c in self.problem.components:
+            q, v = x[c.q_index], x[c.v_index]
+            terms = c.linear(q, v, self.t)
+            mine = list(c.rows)          # the momentum rows not fixed by supports
+            vi = c.v_index[mine]
+            add(vi, c.q_index, -terms["dq"][mine], (rows, cols, values))
+            add(vi, c.v_index, -terms["dv"][mine], (rows, cols, values))
+            f0[vi] -= terms["force"][mine]
+            if terms["hessian"] is not None:
+                add(c.q_index, c.q_index, terms["hessian"], (hrows, hcols, hvalues))
+            if "stiffness" in terms:
+                self.feedback[c.name] = _passivity(terms["stiffness"], terms["damping"])
+        N = f0.size
+        for keys, (r, c_, val) in ((("A", "Am"), (rows, cols, values)), (("Hess",), (hrows, hcols, hvalues))):
+            if not r:
+                continue
+            M = sp.csr_matrix((np.concatenate(val), (np.concatenate(r), np.concatenate(c_))), shape=(N, N))
+            for key in keys:
+                full[key] = sp.lil_matrix(sp.csr_matrix(full[key]) + M)
+
     def groups(self):
         """{(field, component): indices into the retained dofs}."""
         out = {}
@@ -283,10 +340,21 @@ class Linearization:
                 "sizes": {k: list(M.shape) for k, M in mats.items()},
                 "nnz": {k: int(sp.csr_matrix(M).nnz) for k, M in mats.items()},
                 "rank_E": None, "drift_norm": float(np.linalg.norm(self.f0)), "checks": self.checks,
-                "fields": sorted({s[0] for s in self.states}), **(extra or {})}
+                "fields": sorted({s[0] for s in self.states}),
+                **({"feedback": self.feedback} if getattr(self, "feedback", None) else {}), **(extra or {})}
         with open(os.path.join(out, "linear.json"), "w") as fh:
             json.dump(info, fh, indent=2, default=float)
         return info
+
+
+def _passivity(K, D):
+    """A control law's linearization u = -K dxi - D dxi': passive (a port-Hamiltonian element: a
+    virtual spring and damping injection) when K = K^T and D + D^T >= 0 (to 1e-8 of their size)."""
+    scale = max(float(np.max(np.abs(K))), float(np.max(np.abs(D))), 1e-300)
+    asym = float(np.max(np.abs(K - K.T))) / scale
+    lowest = float(np.min(np.linalg.eigvalsh(0.5 * (D + D.T)))) / scale
+    return {"stiffness": K.tolist(), "damping": D.tolist(), "stiffness_asymmetry": asym,
+            "damping_lowest_eigenvalue": lowest * scale, "passive": bool(asym <= 1e-8 and lowest >= -1e-8)}
 
 
 def _norm(M):
@@ -359,7 +427,9 @@ def ph_form(lin):
               "EtQ_asymmetry": _norm(EQ - EQ.T) / (_norm(EQ) or 1.0),
               "R_norm": _norm(R) / nA,
               "output_map_residual": _norm(lin.C - (lin.B.T @ Q)) / (_norm(lin.C) or 1.0),
-              "rows_negated": sorted(set(negated))}
+              "rows_negated": sorted(set(negated)),
+              "passive": all(f["passive"] for f in getattr(lin, "feedback", {}).values()),
+              "not_passive": sorted(name for name, f in getattr(lin, "feedback", {}).items() if not f["passive"])}
     J, R = (_clean(M, nA_max) for M in (J, R))
     Q = _clean(Q, abs(Q).max() or 1.0)
     return J, R, Q, checks

@@ -197,7 +197,7 @@ def linearization(scene, p, about, t, comm, load_steps=1):
     else:
         for load in problem.loads:
             load.update(t)
-    lin = Linearization(problem, reference=ref)
+    lin = Linearization(problem, reference=ref, t=t)
     interrupts.check(comm, 0, t, "after the linearization")
     return lin
 

@@ -81,15 +81,20 @@ class Energy:
             g[k] = float(np.imag(value).reshape(())) / COMPLEX_STEP
         return g
 
-    def hessian(self, xi) -> np.ndarray:
-        """d^2 psi / d xi^2 by central differences of the gradient (Newton's matrix only)."""
+    def hessian(self, xi, order=2) -> np.ndarray:
+        """d^2 psi / d xi^2 by central differences of the gradient: `order` 2 for Newton's matrix
+        (steps 1e-6 max(1, |xi_k|)), 4 for the linear model (rodfem/analysis/linearize.py: the
+        five-point stencil, steps 1e-3 max(|xi|_inf, 1e-4), ~1e-12 relative for an energy that
+        varies on the scale of |xi|)."""
+        if order == 4:
+            return _symmetric(_five_point(self.gradient, np.asarray(xi, dtype=float), 1e-4))
         H = np.zeros((self.m, self.m))
         for k in range(self.m):
             step = 1e-6 * max(1.0, abs(xi[k]))
             e = np.zeros(self.m)
             e[k] = step
             H[:, k] = (self.gradient(xi + e) - self.gradient(xi - e)) / (2 * step)
-        return 0.5 * (H + H.T)
+        return _symmetric(H)
 
     def third(self, xi, u) -> float:
         """D^3 psi(xi)[u, u, u] by the second difference of the directional derivative."""
@@ -204,6 +209,17 @@ class Potential(Component):
         z = psi.gradient(xi)
         return G.T @ z, np.einsum("k,kij->ij", z, self.Q) + G.T @ psi.hessian(xi) @ G
 
+    def linear(self, q, v, t=0.0):
+        """The linear model's terms at (q, v), time t (rodfem/analysis/linearize.py): the force
+        r_v = G^T psi'(xi) on the momentum rows, dr_v/dq = G^T psi''(xi) G + sum_k psi'_k(xi) Q_k (the
+        Hessian of V: the spring's own stiffness and the geometric stiffness of its pre-stress),
+        dr_v/dv = 0, and that Hessian again as the spring's part of Hess (its energy joins H)."""
+        psi = self.energy_at(t)
+        G, xi = self.G(q), self.xi(q)
+        z = psi.gradient(xi)
+        stiffness = G.T @ psi.hessian(xi, order=4) @ G + np.einsum("k,kij->ij", z, self.Q)
+        return {"force": G.T @ z, "dq": stiffness, "dv": np.zeros((len(q), len(q))), "hessian": stiffness}
+
     def step(self, q0, q1, v0, v1, h, t0, t1):
         """(r_v, dr_v/dq1, dr_v/dv1, supplied, dissipated): r_v = G(q_m)^T z on the momentum rows."""
         qm = 0.5 * (q0 + q1)
@@ -256,6 +272,18 @@ class Resistance(Component):
     def at_rest(self, q, t=0.0):
         """Statics: a damper exerts no force at rest."""
         return np.zeros(len(q)), np.zeros((len(q), len(q)))
+
+    def linear(self, q, v, t=0.0):
+        """The linear model's terms at (q, v) (rodfem/analysis/linearize.py): the force
+        r_v = eta G^T G v, dr_v/dv = eta(xi) G^T G (its part of R: symmetric, >= 0) and dr_v/dq, which
+        vanishes at rest (v = 0: only eta's value at the point matters there)."""
+        G = self.G(q)
+        rate = G @ v
+        eta = self.eta(q)
+        dq = eta * (np.einsum("k,kij->ij", rate, self.Q) + G.T @ np.einsum("kij,j->ki", self.Q, v))
+        if callable(self.coefficient) and np.any(rate):   # d eta / dq = eta'(xi) G
+            dq += np.outer(G.T @ rate, _five_point(self.coefficient_of, self.xi(q), 1e-4)[0] @ G)
+        return {"force": eta * G.T @ rate, "dq": dq, "dv": eta * G.T @ G, "hessian": None}
 
     def step(self, q0, q1, v0, v1, h, t0, t1):
         qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
@@ -324,6 +352,24 @@ class Feedback(Component):
         du = _differences(lambda x: self.u(t, x, np.zeros(self.m)), xi, 1e-7)
         return -G.T @ u, -(np.einsum("k,kij->ij", u, self.Q) + G.T @ du @ G)
 
+    def linear(self, q, v, t=0.0):
+        """The linear model's terms at (q, v), time t (rodfem/analysis/linearize.py): the force
+        r_v = -G^T u(t, xi, xi'), dr_v/dq = -(sum_k u_k Q_k + G^T (du/dxi) G + G^T (du/dxi') d(G v)/dq),
+        dr_v/dv = -G^T (du/dxi') G, with du/dxi and du/dxi' by the fourth-order stencil (steps
+        1e-3 max(|.|, 1e-2)); and the law's stiffness K = -du/dxi and damping D = -du/dxi' (m x m).
+        The law is a port-Hamiltonian (passive) element of the linear model when K is symmetric (a
+        virtual spring) and D + D^T >= 0 (damping injection; its skew part is gyroscopic); any other
+        law enters A all the same, but then A is not (J - R) Q with R >= 0 and E^T Q symmetric."""
+        G, xi = self.G(q), self.xi(q)
+        rate = G @ v
+        u = self.u(t, xi, rate)
+        du_dxi = _five_point(lambda x: self.u(t, x, rate), xi, 1e-2)
+        du_drate = _five_point(lambda r: self.u(t, xi, r), rate, 1e-2)
+        dq = -(np.einsum("k,kij->ij", u, self.Q) + G.T @ du_dxi @ G
+               + G.T @ du_drate @ np.einsum("kij,j->ki", self.Q, v))
+        return {"force": -G.T @ u, "dq": dq, "dv": -G.T @ du_drate @ G, "hessian": None,
+                "stiffness": -du_dxi, "damping": -du_drate}
+
     def step(self, q0, q1, v0, v1, h, t0, t1):
         qm, vm, tm = 0.5 * (q0 + q1), 0.5 * (v0 + v1), 0.5 * (t0 + t1)
         Gm = self.G(qm)
@@ -336,6 +382,25 @@ class Feedback(Component):
         dr_dq = -(0.5 * np.einsum("k,kij->ij", u, self.Q) + Gm.T @ (0.5 * du_dxi @ Gm + du_drate @ drate_dq))
         dr_dv = -Gm.T @ (0.5 * du_drate @ Gm)
         return r_v, dr_dq, dr_dv, h * float(u @ rate), 0.0
+
+
+def _symmetric(H):
+    return 0.5 * (H + H.T)
+
+
+def _five_point(f, x, floor):
+    """The Jacobian of f at x by the fourth-order central stencil, steps 1e-3 max(|x|_inf, floor)
+    (the linear model: truncation ~ 1e-12 of a function that varies on the scale of |x|)."""
+    x = np.asarray(x, dtype=float)
+    step = 1e-3 * max(float(np.max(np.abs(x))) if x.size else 0.0, floor)
+    f0 = np.atleast_1d(f(x))
+    J = np.zeros((len(f0), len(x)))
+    for j in range(len(x)):
+        e = np.zeros(len(x))
+        e[j] = step
+        J[:, j] = (8 * (np.atleast_1d(f(x + e)) - np.atleast_1d(f(x - e)))
+                   - (np.atleast_1d(f(x + 2 * e)) - np.atleast_1d(f(x - 2 * e)))) / (12 * step)
+    return J
 
 
 def _differences(f, x, relative):
