@@ -246,14 +246,16 @@ def test_planar_default_element_converges_to_rucker_webster():
 K_SE, K_BT = (1e3, 1e3, 1e3), (0.8, 1.0, 1.0)
 A_CONV, A_TAPER = act.on_circle(0.1, 0.5), act.on_circle(0.08, 2.5)
 
-# id: (tension, Routing (FE), path (oracle), tendon end (None: tip), force per length (world))
+# id: (tension, Routing (FE), path (oracle), tendon end (None: tip), force per length (world)); the two
+# converging and the two helical cases share their compiled forms (a weight, maybe zero; an end or none)
 ROD = {
     "converging-to-axis": (8.0, act.converging(A_CONV, L), converging_path(*A_CONV, L), None, (0.0, 0.0, 0.0)),
     "converging-to-half-under-weight": (10.0, act.converging(A_TAPER, 2 * L), converging_path(*A_TAPER, 2 * L), None,
                                         (0.0, 0.0, -3.0)),
     "helical-1.5-turns-under-weight": (10.0, act.helical(0.06, 3 * np.pi, 0.3), helical_path(0.06, 3 * np.pi, 0.3),
-                                       None, (0.0, 0.0, -3.0)),
-    "helical-ending-at-0.75": (6.0, act.helical(0.08, 4.0), helical_path(0.08, 4.0, 0.0), 0.75, (0.0, 0.0, 0.0)),
+                                       L, (0.0, 0.0, -3.0)),
+    "helical-ending-at-0.75-under-weight": (6.0, act.helical(0.08, 4.0), helical_path(0.08, 4.0, 0.0), 0.75,
+                                            (0.0, 2.0, 0.0)),
 }
 
 
@@ -261,9 +263,7 @@ def rod_statics(case, n):
     """Tip position and directors [d1 d2 d3] of the FE statics of the 3D rod (d1 = e_x at rest)."""
     tau, routing, _, end, f = ROD[case]
     rod = CosseratRod(0.0, (0.0, 0.0, 0.0), [1 / k for k in K_SE], [1 / k for k in K_BT])
-    loads = [act.Tendon(tau, routing, radius=0.2, end=end, name="t")]
-    if any(f):
-        loads.append(Load("v", list(f), "domain", "weight"))
+    loads = [act.Tendon(tau, routing, radius=0.2, end=end, name="t"), Load("v", list(f), "domain", "weight")]
     P = Problem(rod, L, n, loads=loads, supports=[Support("left", "clamped")], initial=straight((0, 0, 0), np.eye(3)),
                 newton_options=NEWTON)
     Statics(P).solve(0.0, 4)
