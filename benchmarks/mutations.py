@@ -463,6 +463,32 @@ MUTATIONS = [
       [f"{LINEAR_COMPONENTS}::test_a_moving_set_point_is_read_at_the_linearization_time[pd_as_components]",
        f"{LINEAR_COMPONENTS}::test_a_moving_set_point_is_read_at_the_linearization_time[pd_in_python]"],
       "timed energies and control laws read at t = 0, not at the time of the linearization (a moving set point)"),
+
+    # -- tendons on converging and helical routings (issue 22) ------------------------------------------
+    M("tendon-planar-slope-dropped", "forms/actuators.py",
+      [("Gamma[1] + dy[0]])", "Gamma[1]])")],
+      ["tests/models/test_tendon_routings.py::test_planar_tendon_on_a_converging_routing_matches_rucker_webster",
+       "tests/models/test_tendon_routings.py::test_planar_default_element_converges_to_rucker_webster"],
+      "the planar fibre tangent without the routing's slope y' (in the length and its gradient alike: a tapering "
+      "tendon neither tilts nor shears the beam)"),
+    M("tendon-rod-slope-sign", "forms/actuators.py",
+      [("ufl.cross(K, y3) + dy3", "ufl.cross(K, y3) - dy3")],
+      ["tests/models/test_tendon_routings.py::test_rod_tendon_on_converging_and_helical_routings_matches_rucker_webster"],
+      "the 3D fibre tangent with the routing's slope y' subtracted (a consistent length of the mirrored routing)"),
+    M("tendon-converging-slope-halved", "forms/actuators.py",
+      [('[-c["offset"][i] / c["length"] + 0.0 * s', '[-0.5 * c["offset"][i] / c["length"] + 0.0 * s')],
+      ["tests/models/test_tendon_routings.py::test_planar_tendon_on_a_converging_routing_matches_rucker_webster",
+       "tests/models/test_tendon_routings.py::test_rod_tendon_on_converging_and_helical_routings_matches_rucker_webster"],
+      "the converging routing's y' half its slope (y and y' disagree; straight routings cannot see it)"),
+    M("tendon-helical-slope-reversed", "forms/actuators.py",
+      [("[-R * k * lib.sin(a), R * k * lib.cos(a)]", "[R * k * lib.sin(a), -R * k * lib.cos(a)]")],
+      ["tests/models/test_tendon_routings.py::test_rod_tendon_on_converging_and_helical_routings_matches_rucker_webster"],
+      "the helical routing's y' turning the other way round than its y"),
+    M("tendon-end-ignored", "forms/actuators.py",
+      [("self.segment = (0.0, float(self.end))", "self.segment = None")],
+      ["tests/models/test_tendon_routings.py::test_planar_tendon_on_a_converging_routing_matches_rucker_webster",
+       "tests/models/test_tendon_routings.py::test_rod_tendon_on_converging_and_helical_routings_matches_rucker_webster"],
+      "a tendon's end s_end ignored: it runs on to the tip (the balance of the longer tendon is exact)"),
 ]
 
 

@@ -225,6 +225,7 @@ class _Actuator:
 
     def __post_init__(self):
         self.history = _history(self.value, f"{self.name}: {self.INPUT}")
+        self.value = self.input    # value(t), as a Load's: what statics reads (analysis/statics.py set_load)
         if not isinstance(self.routing, Routing):
             self.routing = straight(self.routing)
         if not (np.isfinite(self.radius) and self.radius > 0):
@@ -283,10 +284,14 @@ class _Actuator:
     def _bind_more(self, mesh):
         pass
 
-    def update(self, t):
+    def input(self, t):
+        """The input at time t, checked (one line if it is not finite, or a negative tension)."""
         value = float(self.history(t))
         self._check_input(value, t)
-        self.constant.value = value
+        return value
+
+    def update(self, t):
+        self.constant.value = self.input(t)
 
     def indicator(self):
         """1 on the actuator's segment (quadrature points are interior: the ends are nodes)."""

@@ -13,6 +13,7 @@ from mpi4py import MPI
 from processes import ok, rodfem, summary
 
 from rodfem import Load, Problem, Support, run
+from rodfem.analysis.statics import Statics
 from rodfem.demos import soft_arm_pneumatic, soft_arm_swing, tendon_arm
 from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
 from rodfem.errors import ParameterError
@@ -288,6 +289,9 @@ def test_bad_input_one_line_errors():
                 supports=[Support("left", "clamped")], initial=straight((0, 0, 0), np.eye(3)), newton_options=NEWTON)
     with pytest.raises(ParameterError, match=r"t1: tension must be >= 0.*t = 0\.1"):
         run(P, 0.05, 1.0)
+    # statics reads the same checked input (a number or a history) at its time
+    with pytest.raises(ParameterError, match=r"t1: tension must be >= 0.*t = 0\.5"):
+        Statics(P).solve(0.5)
 
 
 def test_cli_bad_input_one_line(rodfem):
