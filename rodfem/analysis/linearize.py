@@ -61,7 +61,7 @@ import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 
-from rodfem.analysis.statics import RestStep, rest_form
+from rodfem.analysis.statics import RestStep, refuse_servos, rest_form
 from rodfem.errors import ParameterError
 from rodfem.fem.jit import compile_forms
 from rodfem.la.pencil import SHIFT, NotVerified, Pencil, SingularPencil, dense_modes, slepc_modes
@@ -132,6 +132,7 @@ class Linearization:
             names = ", ".join(c.name for c in problem.components[:3]) + (", ..." if len(problem.components) > 3 else "")
             raise ParameterError(f"linearize and modes do not take springs, dampers or controllers yet ({names}); "
                                  "use run or static")
+        refuse_servos(problem, "linearize and modes")
         self.problem = problem
         self.system = problem.named_bodies
         problem.build()
