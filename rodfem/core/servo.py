@@ -40,9 +40,11 @@ inputs `name.u1 ...` (at t = 0: the inputs that balance the start, `start_multip
 
 What the midpoint rule can and cannot do with it (`step_inputs`): the positions and the inputs
 that act on the point itself converge at O(h^2); an input that reaches the point at relative
-degree r > 2 carries parasitic solutions (-1)^n p(n) (the rule's zeros at z = -1), and at
-r >= 4 (index 5) round-off grows in it like h^-(r+1) t^2.  A servo whose zero dynamics are
-unstable (the payload of a finite-element cable, whose consistent mass couples its ends at
+degree r > 2 carries parasitic solutions (-1)^n p(n) (the rule's zeros at z = -1), which a
+zero-phase filter (`smoothed`) removes -- but at r = 4 (index 5) they grow in time, the faster
+the smaller h, so the direct servo converges only down to some step (for the crane
+of demos/crane_inverse.py, h = 0.025; benchmarks/bench_servo.py).  A servo whose zero dynamics
+are unstable (the payload of a finite-element cable, whose consistent mass couples its ends at
 once) has no bounded solution at all: see demos/crane_inverse.py.
 """
 from dataclasses import dataclass
@@ -302,10 +304,11 @@ def step_inputs(rows, name, smooth=False):
     (-1)^n p(n), deg p <= r - 2: its transfer function from u to the path has r - 1 zeros at z = -1
     (the implicit midpoint rule is the Tustin map s = (2/h)(z - 1)/(z + 1), whose relative degree r
     becomes zeros at z = -1, less the one of the step-held input), so the exact discrete inverse has
-    poles there.  They ride on the smooth input, excited by the start (a path whose derivatives of
-    order r + 1 and above do not vanish there) and by round-off, and they are invisible in the
-    positions.  smooth=True gives the input through `smoothed` (Tomizuka's zero-phase treatment of
-    zeros at z = -1: "Zero phase error tracking algorithm for digital control", J Dyn Syst Meas
+    poles there.  They ride on the smooth input, invisible in the positions, excited where the path
+    is not flat enough at rest (derivatives of order r + 1 and above that do not vanish there), and
+    for r = 4 they grow in time, the faster the smaller h (measured; nothing damps them at z = -1).
+    smooth=True gives the input through `smoothed` (Tomizuka's zero-phase treatment of zeros at
+    z = -1: "Zero phase error tracking algorithm for digital control", J Dyn Syst Meas
     Control 109 (1987) 65-68, doi:10.1115/1.3143822)."""
     t = np.array([r["t"] for r in rows], dtype=float)
     columns = sorted((k for k in rows[0] if k.startswith(f"{name}.u") and k[len(name) + 2:].isdigit()),

@@ -229,3 +229,38 @@ def test_a_bad_servo_is_one_line(kind, words):
         bad(kind)
     assert isinstance(err.value, ConstraintError) or kind == "statics"
     assert words in str(err.value) and "\n" not in str(err.value), str(err.value)
+
+
+# -- the crane-inverse scene ------------------------------------------------------------------------
+def test_crane_inverse_scene():
+    """The scene solves the servo problem when it is built and runs the open-loop check: the filtered
+    inputs keep the payload within 6.8e-3 m of the path (h = 0.025), the force applied is the flat one
+    to 0.038 N (of 8.5 N); the raw inputs replay the path to Newton's tolerance.  A lift that would put
+    the payload above the rail is refused in one line."""
+    from mpi4py import MPI
+
+    from rodfem.demos.crane_inverse import scene
+    for replay, path_tolerance in (("filtered", 1e-2), ("raw", 1e-9)):
+        p = scene.values({"replay": replay})
+        result = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
+        assert np.max(column(result, "path_error")) <= path_tolerance
+        assert np.max(np.abs(column(result, "balance_error"))) <= 1e-12
+        if replay == "filtered":
+            assert np.max(np.abs(column(result, "F") - column(result, "F_flat"))) <= 0.06
+            assert np.max(np.abs(column(result, "trolley_x") - column(result, "trolley_x_flat"))) <= 0.01
+    with pytest.raises(ParameterError, match="lift"):
+        scene.build(scene.values({"lift": 1.0}), MPI.COMM_WORLD)
+
+
+def test_the_cable_servo_has_no_bounded_input():
+    """crane-manoeuvre's cable (one element) with the payload's x prescribed by the trolley force: the
+    force grows like exp(lambda t) at the rate of the cable's unstable zero dynamics, lambda =
+    sqrt(6 N / (rhoA L^2)) = 7.7 /s for one element (N = 9.81 N, its tension; fitted 8.1 /s), to
+    1.6e9 N after 3 s, although the payload stays on the path."""
+    from rodfem.demos.crane_inverse import cable_servo
+    result = run(cable_servo(1, 0.05), 0.05, 3.0)
+    t, F = column(result, "t"), np.abs(column(result, "servo.u1"))
+    assert F[-1] >= 1e8
+    rate = np.polyfit(t[t >= 1.0], np.log(F[t >= 1.0]), 1)[0]
+    assert rate == pytest.approx(np.sqrt(6 * 9.81 / 1.0), rel=0.1)
+    assert np.max(column(result, "constraint_residual")) <= 1e-8
