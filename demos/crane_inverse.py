@@ -59,8 +59,8 @@
 # raw force is off by 1.5 N (of 8.5 N) at h = 0.05 and 0.025, by 117 N at
 # h = 0.0125.  The zero-phase filter (u_{n-1} + 2 u_n + u_{n+1})/4
 # (rodfem.core.servo.smoothed) removes (-1)^n (a + b n): the filtered force is
-# off by 0.34, 0.090, 0.038 N at h = 0.1, 0.05, 0.025 (order 2), then by
-# 1.4 N at h = 0.0125 -- below h = 0.025 the direct servo's force stops
+# off by 0.34, 0.090, 0.038 N at h = 0.1, 0.05, 0.025 (orders 1.9, 1.2), then
+# by 1.4 N at h = 0.0125 -- below h = 0.025 the direct servo's force stops
 # converging, while the path it realizes still does (benchmarks/bench_servo.py).
 #
 # ## The open-loop check
