@@ -359,7 +359,7 @@ class System:
         return self._sum("H") + stored
 
     def supplied_work(self) -> float:
-        """h y.u of the last step: the bodies' ports and the driven joints."""
+        """h y.u of the last step: the bodies' ports, the driven joints and the servos' inputs."""
         joints = self.assembler.coupling.work if (self.joints or self.components) else 0.0
         return self._sum("work") + joints
 
