@@ -79,7 +79,7 @@ import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fpetsc
 
-from rodfem.analysis.statics import RestStep, rest_form
+from rodfem.analysis.statics import RestStep, refuse_servos, rest_form
 from rodfem.errors import ParameterError
 from rodfem.fem.jit import compile_forms
 from rodfem.la.pencil import SHIFT, NotVerified, Pencil, SingularPencil, dense_modes, slepc_modes
@@ -148,6 +148,7 @@ class Linearization:
     def __init__(self, problem, reference=None, t=None):
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
+        refuse_servos(problem, "linearize and modes")
         self.problem = problem
         self.system = problem.named_bodies
         problem.build()

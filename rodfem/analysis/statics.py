@@ -44,6 +44,7 @@ from dolfinx import fem
 from rodfem.common import interrupts
 from rodfem.common.limits import check_load_steps
 from rodfem.core.integrators import Step, flatten, unflatten
+from rodfem.core.servo import Servo
 from rodfem.core.system import JointRows
 from rodfem.errors import NewtonFailure, ParameterError
 from rodfem.fem.assembly import BlockAssembler, BodyBlock
@@ -151,6 +152,7 @@ class Statics:
     """
 
     def __init__(self, target, options: Optional[dict] = None):
+        refuse_servos(target, "statics")
         self.target = target.build()
         self.bodies = target.body_items()
         self.refs = {}
@@ -283,6 +285,14 @@ def solve(target, t: float = 0.0, steps: int = 1, adaptive: bool = True, options
     (Statics, StaticResult)."""
     statics = Statics(target, options)
     return statics, statics.solve(t, steps, adaptive)
+
+
+def refuse_servos(target, what):
+    """A servo constraint (rodfem/core/servo.py) is an inverse-dynamics problem of a run: refuse it."""
+    servos = [j.name for j in getattr(target, "joints", ()) if isinstance(j, Servo)]
+    if servos:
+        raise ParameterError(f"{what} does not take servo constraints ({', '.join(servos)}): they prescribe a "
+                             "motion in time; use run")
 
 
 class StaticJointRows(JointRows):

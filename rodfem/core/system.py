@@ -32,6 +32,7 @@ from petsc4py import PETSc
 from rodfem.core.body import Body
 from rodfem.core.components import Law
 from rodfem.core.joints import Frame, Joint, Point
+from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
 from rodfem.fem.jit import compile_forms
@@ -115,6 +116,18 @@ class System:
         self._check_name(joint.name)
         self.joints.append(joint)
         return joint
+
+    def servo(self, point: Point, path: Callable, inputs, axes=None, name: str = "") -> Servo:
+        """Servo constraint (inverse dynamics, rodfem/core/servo.py): `point`'s coordinates (those
+        along `axes`) follow path(t), starting where the point is, enforced by the unknown `inputs`
+        (actuators placed on points, e.g. servo.along((1, 0, 0)).at(trolley)), as many as coordinates."""
+        servo = Servo(point, path, inputs, axes, name or f"servo{len(self.joints) + 1}")
+        for i in servo.inputs:
+            self._check_points(f"{servo.describe()}: input {i.describe()}", i.a, i.b)
+        self._check_points(servo.describe(), servo.a, point)
+        self._check_name(servo.name)
+        self.joints.append(servo)
+        return servo
 
     def connect(self, law, a: Point, b: Point, name: str = ""):
         """Place a component of rodfem/forms/components.py (a spring, a damper, a control law) between
@@ -205,6 +218,8 @@ class System:
         self._pull(self.X0, "x0")
         if self.joints:
             self.points.check_independent(self.X0)
+        if any(isinstance(j, Servo) for j in self.joints):
+            start_multipliers(self)
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._ready = True
@@ -221,7 +236,10 @@ class System:
         sides, frames, q0s, scale = self._frames(joint)
         joint.sides = sides
         try:
-            joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
+            if isinstance(joint, Servo):   # many points
+                joint.bind(frames, q0s, scale)
+            else:
+                joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
         except ConstraintError:
             raise
         except (ValueError, TypeError, IndexError) as err:   # e.g. an offset on a point that has none
@@ -240,13 +258,14 @@ class System:
             raise ConstraintError(f"{component.describe()}: {err}") from None
 
     def _frames(self, item):
-        """The coordinates of a joint's or component's two points: (sides, frame builders, q(0), scale)."""
-        points = (item.a, item.b)
+        """The coordinates of a joint's or component's two points (a servo's: all of them): (sides,
+        frame builders, q(0), scale)."""
+        points = getattr(item, "points", (item.a, item.b))
         sides = [None if p.body is None else point_coordinates(p, self.comm) for p in points]
         frames, q0s, scale = [], [], 1.0
         for k, (p, side) in enumerate(zip(points, sides)):
-            if side is None:   # the ground: a fixed frame
-                o, o_side = points[1 - k], sides[1 - k]
+            if side is None:   # the ground: a fixed frame, of the dimension of the first body point
+                o, o_side = next((o, s) for o, s in zip(points, sides) if s is not None)
                 dim = len(o.body.body.model.frame(o_side.unpack(o_side.values(0)), o.offset).x)
                 fixed = ground_frame(p, dim)
                 frames.append(lambda q, g=fixed: g)
@@ -342,7 +361,7 @@ class System:
         return self._sum("H") + stored
 
     def supplied_work(self) -> float:
-        """h y.u of the last step: the bodies' ports and the driven joints."""
+        """h y.u of the last step: the bodies' ports, the driven joints and the servos' inputs."""
         joints = self.assembler.coupling.work if (self.joints or self.components) else 0.0
         return self._sum("work") + joints
 
@@ -524,7 +543,7 @@ class PointIndex:
             for j in self.joints:
                 worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
                 for i, lam in enumerate(vals[j.lam_at]):
-                    obs[f"{j.name}.lambda{i + 1}"] = float(lam)
+                    obs[f"{j.name}.{getattr(j, 'multiplier', 'lambda')}{i + 1}"] = float(lam)
             if self.joints:
                 obs["constraint_residual"] = worst
             for c in self.components:
