@@ -112,10 +112,12 @@ def test_rest_to_rest_profile():
 @pytest.mark.parametrize("scene, args", [
     ("robot-arm-control", ["--set", "n_elements=8", "--set", "t_end=0.5", "--set", "frames=2"]),
     ("four-particle", ["--set", "t_end=1.0", "--set", "frames=2"]),
-], ids=["robot-arm-control", "four-particle"])
+    ("spring-damper-chain", ["--set", "n_bodies=3", "--set", "t_end=0.2", "--set", "frames=2"]),
+    ("crane-inverse", ["--set", "t_end=0.5", "--set", "frames=2"]),
+], ids=["robot-arm-control", "four-particle", "spring-damper-chain", "crane-inverse"])
 def test_mpi_two_ranks_match_serial(tmp_path, scene, args):
-    """Components and controllers under mpirun -n 2 (the arm split over the ranks, the points of the
-    hub on one of them; the particles shared out) give the serial history."""
+    """Components, controllers and servo constraints under mpirun -n 2 (the arm split over the ranks,
+    the points of the hub on one of them; the particles and boxes shared out) give the serial history."""
     serial, parallel, _ = serial_and_parallel(tmp_path, ["run", scene, *args])
     assert_same_history(serial, parallel, rtol=1e-9)
 
