@@ -61,10 +61,13 @@ the static and kinetic coefficients
     mu(s) = mu_k + (mu_s - mu_k) exp(-(s / v_s)^2).
 
 It is a regularization, not the exact set-valued law: a sticking contact creeps at the slip
-velocity ~ eps f_t / (mu N) (eps = 1e-5 m/s by default), and dissipates eps f_t^2 / (mu N) per unit
-time, which is what "no energy lost while rolling" means here (a relative 1e-6 over the rolling
-rod's half second).  Sticking holds as long as the tangential force needs less than mu_s N (at a
-slip << v_s the coefficient is mu_s); once sliding (slip >> v_s) the force is mu_k N.  The force's
+velocity ~ eps f_t / (mu N) (eps = 2e-4 m/s by default), and dissipates about eps f_t^2 / (mu N) per
+unit time, which is what "no energy lost while rolling" means here (a relative 5e-5 over the rolling
+rod's half second).  The law is a stiff damper on the slip (rate ~ mu N / (m eps)): the implicit
+midpoint rule rings on it unless the step resolves it (h mu N / (m_eff eps) of a few), and a sticking
+contact needs eps << v_s (the force must reach mu_s N at a slip where mu is still ~ mu_s).
+Sticking holds as long as the tangential force needs less than mu_s N (at a slip << v_s the
+coefficient is mu_s); once sliding (slip >> v_s) the force is mu_k N.  The force's
 work in a step, with the midpoint slip v_t,m, is
 
     h f_t . v_t,m = -h mu N |v_t,m|^2 / sqrt(|v_t,m|^2 + eps^2) <= 0,
@@ -242,8 +245,8 @@ class Coulomb:
     mu(s) = mu_k + (mu_s - mu_k) exp(-(s/v_s)^2)."""
     mu_s: float
     mu_k: Optional[float] = None
-    eps: float = 1e-5
-    v_s: float = 1e-3
+    eps: float = 2e-4
+    v_s: float = 1e-2
 
     def __post_init__(self):
         self.mu_k = self.mu_s if self.mu_k is None else self.mu_k
