@@ -7,8 +7,11 @@ MEASURE xi(x) of a point x that is QUADRATIC (or linear) in x, and the distance 
 obstacle's surface:
 
     plane     xi = n . (x - p),                    d = xi
-    sphere    xi = |x - c|^2,                      d = sqrt(xi) - R
-    cylinder  xi = |x - p|^2 - (a . (x - p))^2,    d = sqrt(xi) - R
+    sphere    xi = |x - c|^2 - R^2,                      d = sqrt(xi + R^2) - R
+    cylinder  xi = |x - p|^2 - (a . (x - p))^2 - R^2,    d = sqrt(xi + R^2) - R
+
+(xi vanishes on the surface: near contact it is ~ 2 R d, on the scale of the penetration, which is
+what the components' Taylor threshold -- 1e-3 |xi| -- needs).
 
 A body of radius r (a rod's or string's cross-section, the tube of radius r about its centreline)
 has the GAP g = d(xi(x)) - r; g < 0 is a penetration.
@@ -185,12 +188,14 @@ class Sphere:
         self.scale = self.R ** 2   # xi is a squared length
 
     def measure(self, x, n=None, p=None):
-        """xi = |x - c|^2."""
+        """xi = |x - c|^2 - R^2."""
         d = x - (self.p if p is None else p)
-        return _dot(d, d)
+        return _dot(d, d) - self.R ** 2
 
     def distance(self, xi):
-        return _sqrt(xi) - self.R
+        """d = sqrt(xi + R^2) - R, written xi / (sqrt(xi + R^2) + R): without the cancellation, whose
+        round-off the energy's difference quotient would magnify."""
+        return xi / (_sqrt(xi + self.R ** 2) + self.R)
 
     def gradient(self, x, n=None, p=None):
         return 2.0 * (x - (self.p if p is None else p))
@@ -216,13 +221,15 @@ class Cylinder:
         self.scale = self.R ** 2
 
     def measure(self, x, n=None, p=None):
-        """xi = |x - p|^2 - (a . (x - p))^2, the squared distance to the axis."""
+        """xi = |x - p|^2 - (a . (x - p))^2 - R^2, the squared distance to the axis less R^2."""
         a = self.a if n is None else n
         d = x - (self.p if p is None else p)
-        return _dot(d, d) - _dot(a, d) ** 2
+        return _dot(d, d) - _dot(a, d) ** 2 - self.R ** 2
 
     def distance(self, xi):
-        return _sqrt(xi) - self.R
+        """d = sqrt(xi + R^2) - R, written xi / (sqrt(xi + R^2) + R): without the cancellation, whose
+        round-off the energy's difference quotient would magnify."""
+        return xi / (_sqrt(xi + self.R ** 2) + self.R)
 
     def gradient(self, x, n=None, p=None):
         a = self.a if n is None else n
@@ -448,8 +455,8 @@ def obstacle_contact(obstacle, stiffness, radius=0.0):
         return psi(obstacle.distance(xi) - radius)
 
     def columns(xi, z):
-        # N = -dpsi/dg = -z / (dd/dxi): d = xi (plane) or sqrt(xi) - R (dd/dxi = 1 / (2 sqrt(xi)))
-        slope = 1.0 if isinstance(obstacle, Plane) else 0.5 / np.sqrt(xi)
+        # N = -dpsi/dg = -z / (dd/dxi): d = xi (plane) or sqrt(xi + R^2) - R (dd/dxi = 1 / (2 (d + R)))
+        slope = 1.0 if isinstance(obstacle, Plane) else 0.5 / np.sqrt(xi + obstacle.R ** 2)
         return {"N": -z / slope, "gap": obstacle.distance(xi) - radius}
     return potential(_ground_measure(obstacle), energy, "contact", columns=columns)
 

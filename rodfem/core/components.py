@@ -109,7 +109,10 @@ class Energy:
         if n == 0:
             return 0.0
         e = u / n
-        step = 1e-3 * max(1.0, float(np.max(np.abs(xi))))
+        # the step on the scale of xi (not of 1): an energy that varies on a small scale of its measure
+        # (a contact's penalty, xi ~ the penetration) is resolved; the round-off of the difference,
+        # eps |psi'| / step^2, enters z times dxi^2 <= (1e-3 |xi|)^2: at most eps |psi'|
+        step = 1e-3 * max(float(np.max(np.abs(xi))), n, 1e-300)
 
         def slope(t):
             return self.gradient(xi + t * e) @ e
