@@ -62,9 +62,8 @@ def main():
                         "sliding: E_trans = 1/2 m (g (sin a - mu_k cos a) t)^2, E_rot = m (mu_k g cos a t)^2.",
                         "While rolling the friction work is the regularization's creep (eps = 2e-4 m/s). "
                         "Sliding starts at mu_s (the Stribeck blend, v_s = 1e-2 m/s): E_rot ~1 % above the "
-                        "pure-mu_k answer.  Near the limit (tan a / 3 mu_s -> 1) the sticking force needs "
-                        "a slip approaching v_s, where mu already drops: the regularized law slides a little "
-                        "below the exact limit."])
+                        "pure-mu_k answer, 3 % just above the limit (52 deg), where the slip grows slowly.  "
+                        "At 48 deg (0.93 of the limit) the rod still rolls: sticking needs eps << v_s."])
     for r in rows:
         print(r)
 
