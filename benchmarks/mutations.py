@@ -51,6 +51,7 @@ COMPONENTS = "tests/models/test_components.py"
 CONTROL = "tests/models/test_control.py"
 JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
+CONTACT = "tests/models/test_contact.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -504,6 +505,34 @@ MUTATIONS = [
       ["tests/models/test_tendon_routings.py::test_planar_tendon_on_a_converging_routing_matches_rucker_webster",
        "tests/models/test_tendon_routings.py::test_rod_tendon_on_converging_and_helical_routings_matches_rucker_webster"],
       "a tendon's end s_end ignored: it runs on to the tip (the balance of the longer tendon is exact)"),
+
+    # -- contact and friction (issue 24) ---------------------------------------------------------
+    M("contact-midpoint-effort", "rodfem/core/integrators.py",
+      [('        if self.rule != "discrete-gradient":\n            A = ufl.variable(am)',
+        '        if True:\n            A = ufl.variable(am)')],
+      [f"{CONTACT}::test_string_falling_on_an_obstacle_keeps_the_balance[plane]",
+       f"{CONTACT}::test_string_falling_on_an_obstacle_keeps_the_balance[sphere]"],
+      "a distributed contact's co-energy psi'(g(x_m)) under the discrete gradient (not the difference quotient)"),
+    M("contact-friction-not-booked", "forms/contact.py",
+      [("        if self.friction is None:\n            return None\n        z, grad = self._step_terms(step)",
+        "        if True:\n            return None\n        z, grad = self._step_terms(step)")],
+      [f"{CONTACT}::test_string_falling_on_an_obstacle_keeps_the_balance[plane-friction]",
+       f"{CONTACT}::test_rolling_rod_energies_follow_the_analytic_solution[sliding]"],
+      "the friction's work left out of `dissipated` (distributed contact)"),
+    M("contact-friction-ignores-spin", "forms/contact.py",
+      [('            return v - r * sum(ufl.inner(n, x[d]) * w[wi] for d, wi in (("d2", "w2"), ("d3", "w3")))',
+        "            return v")],
+      [f"{CONTACT}::test_rolling_rod_energies_follow_the_analytic_solution[rolling]"],
+      "friction at the centreline, not at the rod's surface: it neither spins the rod nor lets it roll"),
+    M("contact-point-friction-not-booked", "rodfem/core/components.py",
+      [("        return r_v, dr_dq, dr_dv, 0.0, h * max(power, 0.0)", "        return r_v, dr_dq, dr_dv, 0.0, 0.0")],
+      [f"{CONTACT}::test_block_slides_down_the_incline_with_the_coulomb_deceleration"],
+      "a Dissipator's (point friction's) work left out of `dissipated`"),
+    M("contact-penalty-quadratic", "forms/contact.py",
+      [("            return k / 3.0 * ufl.conditional(ufl.lt(g, 0.0), -g, 0.0) ** 3",
+        "            return k / 2.0 * ufl.conditional(ufl.lt(g, 0.0), -g, 0.0) ** 2")],
+      [f"{CONTACT}::test_rolling_rod_energies_follow_the_analytic_solution[rolling]"],
+      "the distributed penalty k/2 <-g>^2 instead of k/3 <-g>^3: the rod sinks to the wrong depth"),
 ]
 
 

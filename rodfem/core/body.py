@@ -10,6 +10,20 @@ together and solves them with one Newton.
 Only what the body uses is built: the loads it lists, the supports it lists,
 the tip only if the end s = L is free (else the mean position
 (1/L) int r ds), momentum maps only if nothing is supported.
+
+An INTERACTION (the `contacts` a body lists, e.g. forms/contact.py: contact with an obstacle and
+its friction) is a port with an energy and a dissipation of its own, terminated inside the body:
+
+``bind(body)``                      check the body's fields, make its constants
+``energy(x, dx, ds)``               its stored energy, a UFL form (joins H)
+``residual(step, test, dx, ds)``    its forces in the balance rows (joins F)
+``dissipation(step, dx, ds)``       h d_n >= 0 of the step (UFL), or None
+``observables(x, dx, ds)``          dict column -> UFL functional (its forces)
+``monitor(body)``                   optional: dict column -> number of the state x_{n+1},
+                                    computed from the dofs (collective), e.g. a largest penetration
+
+so that H_{n+1} - H_n + dissipated = supplied holds with it exactly when its residual does the
+work energy_{n+1} - energy_n - dissipated on the step.
 """
 import numpy as np
 import ufl
@@ -34,7 +48,7 @@ class Body:
 
     @compiles  # the elements and the initial values' expressions: under the JIT cache lock
     def __init__(self, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None,
-                 integrator="midpoint", comm=MPI.COMM_WORLD, name=""):
+                 integrator="midpoint", comm=MPI.COMM_WORLD, name="", contacts=()):
         self.model, self.name = model, name
         self.rigid = bool(getattr(model, "point", False))
         if self.rigid:
@@ -45,6 +59,7 @@ class Body:
         self.length = float(length)
         self.n_elements = 1 if self.rigid else check_elements(n_elements, dofs_per_element(model.fields), comm)
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
+        self.contacts = list(contacts)
         self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
         self.comm = self.mesh.comm
         self.space = S = (RigidSpace if self.rigid else StateSpace)(self.mesh, model.fields)
@@ -59,6 +74,8 @@ class Body:
         for load in self.loads:
             load.bind(self.mesh, S)
         self.bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]
+        for contact in self.contacts:
+            contact.bind(self)
 
     # -- the forms of one step (UFL, not compiled) ------------------------------
     def residual_form(self):
@@ -67,6 +84,8 @@ class Body:
         F = self.model.residual(self.step, test, self.dx, self.ds)
         for load in self.loads:
             F += load.input_map(self.step, test, self.dx, self.ds)
+        for contact in self.contacts:
+            F += contact.residual(self.step, test, self.dx, self.ds)
         return F
 
     def forms(self, prefix=""):
@@ -76,7 +95,10 @@ class Body:
         F = self.residual_form()
         powers = [load.power(self.step, self.dx, self.ds) for load in self.loads]
         X1 = self.space.split(self.x1)
-        forms = {"F": F, "J": ufl.derivative(F, self.x1), "H": self.model.hamiltonian(X1, self.dx, self.ds),
+        H = self.model.hamiltonian(X1, self.dx, self.ds)
+        for contact in self.contacts:   # the interactions' stored energies
+            H += contact.energy(X1, self.dx, self.ds)
+        forms = {"F": F, "J": ufl.derivative(F, self.x1), "H": H,
                  "work": self.h * sum(powers[1:], powers[0]) if powers else None,
                  **{"obs:" + prefix + k: v for k, v in self.observables(X1).items()}}
         dissipation = self.dissipation_form()
@@ -85,9 +107,13 @@ class Body:
         return forms
 
     def dissipation_form(self):
-        """h d_n, the energy the step dissipates (UFL), or None: the model's optional `dissipation`."""
+        """h d_n, the energy the step dissipates (UFL), or None: the model's optional `dissipation`
+        and that of the interactions."""
         dissipation = getattr(self.model, "dissipation", None)
-        return dissipation(self.step, self.dx, self.ds) if dissipation is not None else None
+        terms = [dissipation(self.step, self.dx, self.ds)] if dissipation is not None else []
+        terms += [c.dissipation(self.step, self.dx, self.ds) for c in self.contacts]
+        terms = [t for t in terms if t is not None]
+        return sum(terms[1:], terms[0]) if terms else None
 
     # -- set-up -------------------------------------------------------------
     def _tag_ends(self):
@@ -141,7 +167,23 @@ class Body:
         for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
             if hasattr(load, "observables"):
                 obs.update(load.observables(X, self.dx, self.ds))
+        obs.update(self.interaction_forms(X))
         return obs
+
+    def interaction_forms(self, X):
+        """The interactions' columns (their forces) as functionals of the state X."""
+        obs = {}
+        for contact in self.contacts:
+            obs.update(contact.observables(X, self.dx, self.ds))
+        return obs
+
+    def monitor(self):
+        """The interactions' numeric columns of x_{n+1} (collective)."""
+        out = {}
+        for contact in self.contacts:
+            if hasattr(contact, "monitor"):
+                out.update(contact.monitor(self))
+        return out
 
     def momentum_forms(self, X):
         """The momentum maps (p_x, ..., L_z) of the model as functionals."""

@@ -31,13 +31,20 @@ exactly (the engine finds the quadratic form by polarization and refuses any oth
   coefficient eta(xi(q_m)) >= 0 that may depend on the measure at the midpoint (R(x) of the
   PH-DAE).  It dissipates h d_n = h eta |G(q_m) v_m|^2 >= 0 in the step (the `dissipated` column).
 
+* A `Dissipator` is a nonlinear resistance: the force G(q_m)^T f(xi_m, xi'_m) on the momentum rows
+  with any law f of the measure and its rate at the step's midpoint (xi_m = xi(q_m),
+  xi'_m = G(q_m) v_m) that resists the motion, xi'_m . f >= 0 (regularized Coulomb friction,
+  forms/contact.py).  It dissipates h d_n = h xi'_m . f >= 0 in the step, exactly the work its force
+  takes from the kinetic energy (the kinematic rows give q_{n+1} - q_n = h v_m); a law that would
+  supply energy is refused in one line.
+
 The energy functions psi are plain functions of numbers (written with numpy): the engine
 differentiates them by the complex step (exact first derivatives), the second and third
 derivatives (Newton's matrix, the Taylor term) by differences of those.
 """
 import warnings
 from dataclasses import dataclass
-from typing import Callable, Union
+from typing import Callable, Optional, Union
 
 import numpy as np
 
@@ -102,7 +109,10 @@ class Energy:
         if n == 0:
             return 0.0
         e = u / n
-        step = 1e-3 * max(1.0, float(np.max(np.abs(xi))))
+        # the step on the scale of xi (not of 1): an energy that varies on a small scale of its measure
+        # (a contact's penalty, xi ~ the penetration) is resolved; the round-off of the difference,
+        # eps |psi'| / step^2, enters z times dxi^2 <= (1e-3 |xi|)^2: at most eps |psi'|
+        step = 1e-3 * max(float(np.max(np.abs(xi))), n, 1e-300)
 
         def slope(t):
             return self.gradient(xi + t * e) @ e
@@ -162,7 +172,7 @@ class Potential(Component):
 
     def __init__(self, measure: Callable, energy: Callable, a: Point, b: Point, name: str, timed: bool = False):
         super().__init__(measure, a, b, name)
-        self.psi, self.timed = energy, timed
+        self.psi, self.timed, self.columns = energy, timed, None
 
     def energy_at(self, t) -> Energy:
         """psi(., t) (psi itself when the energy does not depend on time)."""
@@ -184,8 +194,15 @@ class Potential(Component):
         return self.energy_at(t)(self.xi(q))
 
     def observe(self, q1, v1, t1, q0, v0, t0):
-        """`name.V`: the stored energy at t1."""
-        return {f"{self.name}.V": self.energy(q1, t1)}
+        """`name.V`: the stored energy at t1; and the law's own columns (`columns(xi, psi'(xi))`,
+        e.g. a contact's normal force and gap), named name.column."""
+        out = {f"{self.name}.V": self.energy(q1, t1)}
+        if self.columns is not None:
+            xi = self.xi(q1)
+            z = self.energy_at(t1).gradient(xi)
+            out.update({f"{self.name}.{k}": float(v) for k, v in
+                        self.columns(xi[0] if self.m == 1 else xi, z[0] if self.m == 1 else z).items()})
+        return out
 
     def co_energy(self, psi, xi0, xi1, xim):
         """(z, dz/dxi1) of the step: the midpoint gradient or the discrete gradient in xi."""
@@ -200,7 +217,12 @@ class Potential(Component):
             bracket = psi(xi1) - psi(xi0) - grad @ dxi
         else:
             bracket = psi.third(xi_bar, dxi) / 24.0
-        return grad + (bracket / n2 if n2 > 0 else 0.0) * dxi, psi.hessian(xi_bar)
+        z = grad + (bracket / n2 if n2 > 0 else 0.0) * dxi
+        if self.m == 1 and n2 > (TAYLOR_BELOW * size) ** 2:
+            # one measure: z is the difference quotient, dz/dxi1 = (psi'(xi1) - z) / dxi exactly (Newton
+            # converges through a step that crosses a kink of psi, e.g. a contact's onset)
+            return z, 2.0 * (psi.gradient(xi1) - z).reshape(1, 1) / dxi[0]
+        return z, psi.hessian(xi_bar)
 
     def at_rest(self, q, t=0.0):
         """(r_v, dr_v/dq) of statics: the force G(q)^T psi'(xi(q)) and its derivative."""
@@ -231,7 +253,7 @@ class Potential(Component):
         if hess is None:   # midpoint: z = psi'(xi(q_m)), dz/dq1 = psi''(xi_m) G_m / 2
             hess = psi.hessian(xim)
             dz_dq = 0.5 * hess @ Gm
-        else:              # discrete gradient: dz/dq1 ~ psi''(xi_bar) G(q1) / 2 (Newton's matrix)
+        else:              # discrete gradient: dz/dq1 ~ psi''(xi_bar) G(q1) / 2 (Newton's matrix; exact for m = 1)
             dz_dq = 0.5 * hess @ self.G(q1)
         r_v = Gm.T @ z
         dr_dq = 0.5 * np.einsum("k,kij->ij", z, self.Q) + Gm.T @ dz_dq
@@ -384,6 +406,73 @@ class Feedback(Component):
         return r_v, dr_dq, dr_dv, h * float(u @ rate), 0.0
 
 
+class Dissipator(Component):
+    """A nonlinear resistance (see the module docstring): the force G(q_m)^T f(xi_m, xi'_m),
+    dissipating h xi'_m . f >= 0.  `law(xi, rate)` returns m numbers (Newton's matrix takes its
+    derivatives by central differences); `columns(xi, rate, f)` (optional) names history columns."""
+    dissipative = True
+
+    def __init__(self, measure: Callable, law: Callable, a: Point, b: Point, name: str, columns=None):
+        super().__init__(measure, a, b, name)
+        self.law, self.columns = law, columns
+
+    def bind(self, *args, **kwargs):
+        super().bind(*args, **kwargs)
+        self.force(self.xi(self.q_initial), np.zeros(self.m))
+
+    def force(self, xi, rate) -> np.ndarray:
+        value = self.law(xi[0] if self.m == 1 else xi, rate[0] if self.m == 1 else rate)
+        value = np.atleast_1d(np.asarray(value, dtype=float))
+        if value.shape != (self.m,) or not np.all(np.isfinite(value)):
+            raise ConstraintError(f"{self.describe()}: the resistance law must return {self.m} finite "
+                                  f"number(s) (got {value.tolist()})")
+        return value
+
+    def observe(self, q1, v1, t1, q0, v0, t0):
+        """`name.f1 ...` (or the law's `columns`): its force at the state (q1, v1)."""
+        xi, rate = self.xi(q1), self.G(q1) @ v1
+        f = self.force(xi, rate)
+        if self.columns is not None:
+            return {f"{self.name}.{k}": float(v) for k, v in self.columns(xi, rate, f).items()}
+        return {f"{self.name}.f{i + 1}": float(x) for i, x in enumerate(f)}
+
+    def at_rest(self, q, t=0.0):
+        """Statics: the force at rest, f(xi, 0) (zero for friction)."""
+        G, xi = self.G(q), self.xi(q)
+        f = self.force(xi, np.zeros(self.m))
+        df = _differences(lambda x: self.force(x, np.zeros(self.m)), xi, 1e-7)
+        return G.T @ f, np.einsum("k,kij->ij", f, self.Q) + G.T @ df @ G
+
+    def linear(self, q, v, t=0.0):
+        """The linear model's terms at (q, v): r_v = G^T f, dr_v/dv = G^T (df/drate) G (its part of R),
+        dr_v/dq = sum_k f_k Q_k + G^T (df/dxi) G + G^T (df/drate) d(G v)/dq."""
+        G, xi = self.G(q), self.xi(q)
+        rate = G @ v
+        f = self.force(xi, rate)
+        df_dxi = _five_point(lambda x: self.force(x, rate), xi, 1e-2)
+        df_drate = _five_point(lambda r: self.force(xi, r), rate, 1e-2)
+        dq = (np.einsum("k,kij->ij", f, self.Q) + G.T @ df_dxi @ G
+              + G.T @ df_drate @ np.einsum("kij,j->ki", self.Q, v))
+        return {"force": G.T @ f, "dq": dq, "dv": G.T @ df_drate @ G, "hessian": None}
+
+    def step(self, q0, q1, v0, v1, h, t0, t1):
+        qm, vm = 0.5 * (q0 + q1), 0.5 * (v0 + v1)
+        Gm = self.G(qm)
+        xim, rate = self.xi(qm), Gm @ vm
+        f = self.force(xim, rate)
+        power = float(f @ rate)
+        if power < -1e-12 * max(float(np.linalg.norm(f) * np.linalg.norm(rate)), 1e-300):
+            raise ConstraintError(f"{self.describe()}: its law supplies energy (rate . f = {power:.3g} < 0); "
+                                  "a resistance must satisfy rate . f >= 0")
+        df_dxi = _differences(lambda x: self.force(x, rate), xim, 1e-7)
+        df_drate = _differences(lambda r: self.force(xim, r), rate, 1e-7)
+        drate_dq = 0.5 * np.einsum("kij,j->ki", self.Q, vm)
+        r_v = Gm.T @ f
+        dr_dq = 0.5 * np.einsum("k,kij->ij", f, self.Q) + Gm.T @ (0.5 * df_dxi @ Gm + df_drate @ drate_dq)
+        dr_dv = Gm.T @ (0.5 * df_drate @ Gm)
+        return r_v, dr_dq, dr_dv, 0.0, h * max(power, 0.0)
+
+
 def _symmetric(H):
     return 0.5 * (H + H.T)
 
@@ -426,16 +515,29 @@ class Law:
     value: object
     label: str
     timed: bool = False
+    columns: Optional[Callable] = None
 
     def between(self, a: Point, b: Point, name: str) -> Component:
         if self.kind == "potential":
-            return Potential(self.measure, self.value, a, b, name, self.timed)
+            component = Potential(self.measure, self.value, a, b, name, self.timed)
+            component.columns = self.columns
+            return component
+        if self.kind == "dissipator":
+            return Dissipator(self.measure, self.value, a, b, name, self.columns)
         return (Resistance if self.kind == "resistance" else Feedback)(self.measure, self.value, a, b, name)
 
 
-def potential(measure: Callable, energy: Callable, label: str = "potential", timed: bool = False) -> Law:
-    """Stored energy psi(xi) (or psi(xi, t) if `timed`) of the quadratic measure xi(a, b, a0, b0)."""
-    return Law("potential", measure, energy, label, timed)
+def potential(measure: Callable, energy: Callable, label: str = "potential", timed: bool = False,
+              columns: Optional[Callable] = None) -> Law:
+    """Stored energy psi(xi) (or psi(xi, t) if `timed`) of the quadratic measure xi(a, b, a0, b0);
+    `columns(xi, psi'(xi))` -> dict: history columns of its own (name.column)."""
+    return Law("potential", measure, energy, label, timed, columns)
+
+
+def dissipator(measure: Callable, law: Callable, label: str = "resistance", columns: Optional[Callable] = None) -> Law:
+    """A nonlinear resistance: the force f = law(xi, xi') along the quadratic measure, with xi' . f >= 0;
+    `columns(xi, rate, f)` -> dict: its history columns (default name.f1, ...)."""
+    return Law("dissipator", measure, law, label, False, columns)
 
 
 def resistance(measure: Callable, coefficient: Union[float, Callable], label: str = "damper") -> Law:

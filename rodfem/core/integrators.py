@@ -21,6 +21,11 @@ The rules differ only in the co-energy (effort) z of the stored energy W:
 
 With z tested in the space of the strain rows, H_{n+1} - H_n = h y.u follows
 (see docs of each model in forms/).
+
+`Step.scalar_effort` is the same rule for an energy W(a) of one scalar a(x) of the state that is
+not a field (a contact's gap, a squared distance): midpoint W'(a(x_m)); discrete gradient the
+difference quotient [W(a_{n+1}) - W(a_n)] / (a_{n+1} - a_n), with the Taylor term
+W'(a_bar) + W^(3)(a_bar) da^2 / 24 where |da| <= a threshold the caller gives in the units of a.
 """
 import ufl
 
@@ -85,3 +90,20 @@ class Step:
             bracket = ufl.conditional(ufl.gt(dX2, DG_THRESHOLD ** 2), dW - ufl.inner(grad, dX), d3W / 24.0)
             grad = grad + bracket / ufl.conditional(ufl.gt(dX2, 0.0), dX2, 1.0) * dX
         return unflatten(grad, like)
+
+    def scalar_effort(self, energy, a0, a1, am, threshold):
+        """The co-energy of energy(a) for a scalar a of the state (UFL; a0, a1, am = a(x_n),
+        a(x_{n+1}), a(x_{n+1/2})): midpoint energy'(am); discrete gradient the difference quotient
+        (energy(a1) - energy(a0)) / (a1 - a0), so that z (a1 - a0) = energy(a1) - energy(a0) exactly,
+        replaced by its Taylor expansion energy'(a_bar) + energy^(3)(a_bar) da^2 / 24 about
+        a_bar = (a0 + a1)/2 where |a1 - a0| <= threshold (the quotient's cancellation)."""
+        if self.rule != "discrete-gradient":
+            A = ufl.variable(am)
+            return ufl.diff(energy(A), A)
+        A = ufl.variable(0.5 * (a0 + a1))
+        d1 = ufl.diff(energy(A), A)
+        d3 = ufl.diff(ufl.diff(d1, A), A)
+        da = a1 - a0
+        large = ufl.gt(abs(da), threshold)
+        quotient = (energy(a1) - energy(a0)) / ufl.conditional(large, da, 1.0)
+        return ufl.conditional(large, quotient, d1 + d3 * da ** 2 / 24.0)

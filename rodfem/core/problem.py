@@ -26,9 +26,9 @@ class Problem(System):
 
     def __init__(self, model: Model, length: float, n_elements: int, loads: Sequence[Load] = (),
                  supports: Sequence[Support] = (), initial: Optional[dict] = None, integrator: str = "midpoint",
-                 comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None):
+                 comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None, contacts: Sequence = ()):
         super().__init__(integrator, comm, newton_options)
-        self._place("", model, length, n_elements, loads, supports, initial)
+        self._place("", model, length, n_elements, loads, supports, initial, contacts)
         self.build()
 
     def __getattr__(self, name):

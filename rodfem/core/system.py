@@ -88,22 +88,24 @@ class System:
 
     # -- the sketch -------------------------------------------------------------
     def add(self, name: str, model, length: float = 1.0, n_elements: int = 1, loads=(), supports=(),
-            initial: Optional[dict] = None, shape=None) -> BodyRef:
+            initial: Optional[dict] = None, shape=None, contacts=()) -> BodyRef:
         """Place a body: a flexible one on [0, length] with n_elements cells (or `shape` = (length,
-        initial), e.g. rodfem.forms.planar_beam.straight(a, b)), or a rigid one (initial values only)."""
+        initial), e.g. rodfem.forms.planar_beam.straight(a, b)), or a rigid one (initial values only).
+        `contacts`: the body's interactions (rodfem/core/body.py), e.g. forms/contact.py's contacts
+        with obstacles; their columns are named body.column."""
         if not isinstance(name, str) or name in self.bodies or not name or "." in name:
             raise ConstraintError(f"body name {name!r} must be new, non-empty and without '.'")
         if shape is not None:
             if initial is not None:
                 raise ConstraintError(f"body {name}: give either shape or initial, not both")
             length, initial = shape
-        return self._place(name, model, length, n_elements, loads, supports, initial)
+        return self._place(name, model, length, n_elements, loads, supports, initial, contacts)
 
-    def _place(self, name, model, length, n_elements, loads, supports, initial):
+    def _place(self, name, model, length, n_elements, loads, supports, initial, contacts=()):
         if self._ready:
             raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
                                   "add every body before the first run")
-        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name)
+        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts)
         ref = BodyRef(name, body)
         self.bodies[name] = ref
         return ref
@@ -195,6 +197,11 @@ class System:
                 X1 = ref.body.space.split(ref.body.x1)
                 for k, f in ref.body.momentum_forms(X1).items():
                     forms[(ref.name, "obs:" + k)] = f
+        if not self.single:   # the interactions' columns, body by body
+            for ref in refs:
+                X1 = ref.body.space.split(ref.body.x1)
+                for k, f in ref.body.interaction_forms(X1).items():
+                    forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
         size = 0
         for j in self.joints:
             j.offset = size
@@ -205,7 +212,7 @@ class System:
         self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
         self.columns = list(dict.fromkeys(self.columns))
         if not self.single:
-            self.columns.sort(key=lambda c: ("pL".index(c[4]), c))
+            self.columns.sort(key=lambda c: ("pL".index(c[4]) if c[4] in "pL" and c[5] == "_" else 2, c))
         self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
         self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
@@ -386,6 +393,9 @@ class System:
             obs.update(self.points.observe(self.X1))
         if not self.single:
             obs.update({k[4:]: self._sum(k) for k in self.columns})
+        for name, ref in self.bodies.items():
+            for k, value in ref.body.monitor().items():
+                obs[f"{name}.{k}" if name else k] = value
         for columns in self.recorders:
             obs.update(columns(self))
         return obs
