@@ -5,6 +5,7 @@ import csv
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 
@@ -19,6 +20,19 @@ def environment(**extra):
     """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed."""
     return dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                 OMPI_MCA_rmaps_base_oversubscribe="1", **extra)
+
+
+def signals_as_a_terminal():
+    """A child's `preexec_fn`: SIGINT and SIGTERM at their default actions, as when started from a
+    terminal (a background job of a script inherits SIGINT ignored, and rodfem keeps an ignored
+    signal ignored: the interrupt tests would then see no interrupt)."""
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, signal.SIG_DFL)
+
+
+def popen(args, **kwargs):
+    """subprocess.Popen(args, **kwargs) with SIGINT and SIGTERM as from a terminal."""
+    return subprocess.Popen(args, preexec_fn=signals_as_a_terminal, **kwargs)
 
 
 def command(*args, np=None, timeout=600):

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import REPO, RODFEM, command, environment, rodfem, summary
+from processes import REPO, RODFEM, command, environment, popen, rodfem, summary
 
 from rodfem.app.cli import main
 
@@ -228,7 +228,7 @@ def wait_for_status(out, status="running", timeout=60):
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_stops_between_steps_and_keeps_the_results(sig, code, tmp_path):
     out = str(tmp_path)
-    p = subprocess.Popen(command("run", *LONG, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    p = popen(command("run", *LONG, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, env=environment(), cwd=REPO)
     wait_for_rows(out)
     assert summary(out)["status"] == "running"
@@ -250,7 +250,7 @@ def test_static_stops_between_load_steps(sig, code, tmp_path):
     """`rodfem static` stops between two load steps like `run` between time steps (it ran on to the
     end, exit 0, and a second signal did not stop it either)."""
     out = str(tmp_path)
-    p = subprocess.Popen(command(*STATIC, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    p = popen(command(*STATIC, "--out", out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True, env=environment(), cwd=REPO)
     wait_for_rows(out, name="loadsteps.csv")
     p.send_signal(sig)
@@ -266,7 +266,7 @@ def test_static_stops_between_load_steps(sig, code, tmp_path):
 def test_modes_stop_before_the_eigenvalue_solve(tmp_path):
     """`rodfem modes` stops on a signal before its eigenvalue solve; its summary.json says so."""
     out = str(tmp_path)
-    p = subprocess.Popen(command("modes", "cantilever-2d", "--set", "n_elements=100", "--out", out),
+    p = popen(command("modes", "cantilever-2d", "--set", "n_elements=100", "--out", out),
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment(), cwd=REPO)
     wait_for_status(out)
     p.send_signal(signal.SIGINT)
@@ -298,7 +298,7 @@ def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):
     cache, out = tmp_path / "cache", str(tmp_path / "out")
     xdg = {"XDG_CACHE_HOME": str(cache)}
     # Ctrl-C during the first compilation (to the process group: the C compiler gets it too)
-    p = subprocess.Popen(command("run", *RU, "--set", "t_end=100", "--out", out), stderr=subprocess.PIPE,
+    p = popen(command("run", *RU, "--set", "t_end=100", "--out", out), stderr=subprocess.PIPE,
                          text=True, env=environment(**xdg), cwd=REPO, start_new_session=True)  # the forms of RU
     t0 = time.time()
     while not stale(cache) and time.time() - t0 < 60:
@@ -364,7 +364,7 @@ def test_a_held_jit_cache_lock(tmp_path):
                                                              "RODFEM_JIT_LOCK_TIMEOUT": "soon"})
         assert one_line(p.stderr) == "rodfem: error: RODFEM_JIT_LOCK_TIMEOUT must be a number of seconds >= 0 " \
                                      "(got 'soon')"
-        p = subprocess.Popen(command("run", *RU, "--out", out), stderr=subprocess.PIPE, text=True, cwd=REPO,
+        p = popen(command("run", *RU, "--out", out), stderr=subprocess.PIPE, text=True, cwd=REPO,
                              env=environment(XDG_CACHE_HOME=str(cold)))
         assert p.stderr.readline().startswith("rodfem: waiting for the JIT cache lock")
         p.send_signal(signal.SIGTERM)
@@ -423,7 +423,7 @@ def test_mpi_a_held_jit_cache_lock(tmp_path):
 @pytest.mark.mpi
 def test_mpi_interrupt_of_one_rank_stops_both(tmp_path):
     out = str(tmp_path)
-    p = subprocess.Popen(command("run", *LONG, "--out", out, np=2, timeout=300), stdout=subprocess.PIPE,
+    p = popen(command("run", *LONG, "--out", out, np=2, timeout=300), stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, env=environment(), cwd=REPO)
     wait_for_rows(out)
     ranks = [rank for mpirun in children(p.pid) for rank in children(mpirun)]   # timeout -> mpirun -> ranks

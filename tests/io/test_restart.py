@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import REPO, command, environment, history, ok
+from processes import REPO, command, environment, history, ok, popen
 
 from rodfem import Support
 from rodfem.app.cli import main
@@ -51,7 +51,7 @@ def test_a_killed_run_resumes_from_its_last_checkpoint(rodfem, tmp_path):
     sets = ["--set", "dt=0.002", "--set", "t_end=10", "--set", "checkpoint_every=250", "--set", "frames=20"]
     full, killed = str(tmp_path / "full"), str(tmp_path / "killed")
     ok(rodfem("run", "flying-spaghetti-2d", *sets, "--quiet", "--out", full))
-    p = subprocess.Popen([*command("run", "flying-spaghetti-2d", *sets, "--quiet", "--out", killed)], env=env,
+    p = popen([*command("run", "flying-spaghetti-2d", *sets, "--quiet", "--out", killed)], env=env,
                          cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
     while not os.path.exists(os.path.join(killed, "checkpoint.npz")) and time.time() - t0 < 300:
