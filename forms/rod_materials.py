@@ -64,6 +64,7 @@ class RodMaterial(materials.Material):
     quadratic = False
     nonnegative = ()
     check = None
+    stress_scales = None
 
     def __init__(self, name, function, params, signed=()):
         super().__init__(name, function, params, signed=tuple(signed) + tuple(self.nonnegative))
@@ -116,23 +117,37 @@ class RodMaterial(materials.Material):
             X[active] -= np.linalg.solve(self.compliance(X)[np.ix_(active, active)], r)
         raise ValueError(f"material {self.name}: no stresses for the strains {tuple(e)} (Newton: {maxit} iterations)")
 
-    def weights(self):
-        """The metric of the discrete gradient's correction (rodfem/core/integrators.py): C0_ii^2 per
-        component (C0: the small-strain compliances), i.e. Gonzalez' rule in the small-strain
-        strains y = C0 (N, M), dimensionless as the rule's Taylor threshold |dy| <= 1e-3 assumes (in
-        the stresses themselves, a moment of 800 N m would take the cancelling quotient at every
-        step and leave a residual floor of 4e-12 in the roll-up); 0 for a component W* does not
-        depend on (a zero compliance: a constraint, whose strain stays exactly 0)."""
+    def scales(self):
+        """Stress scales S_i of the six components: where W* departs from its Taylor polynomial.
+        Default 1/C0_ii (C0: the small-strain compliances; the stress of a unit strain) or 1;
+        a material with a narrower nonlinearity declares it (`rod_material(scales=...)`)."""
         C0 = np.diag(self.compliance())
+        S = [1.0 / c if c > 0 else 1.0 for c in C0]
+        if self.stress_scales is not None:
+            for i, value in type(self).stress_scales(self.params).items():
+                S[i] = float(value)
+        return S
+
+    def weights(self):
+        """The metric of the discrete gradient's correction (rodfem/core/integrators.py): 1/S_i^2 per
+        component (`scales`), i.e. Gonzalez' rule in the dimensionless y_i = X_i/S_i, as the rule's
+        Taylor threshold |dy| <= 1e-3 assumes.  In the stresses themselves, a moment of 800 N m
+        would take the cancelling quotient at every step (a residual floor of 4e-12 in the
+        roll-up), and a law with a narrow transition (asymmetric, delta = 1 N) the Taylor branch
+        over steps much wider than delta (a balance error of 3e-8).  0 for a component W* does not
+        depend on (a zero compliance: a constraint, whose strain stays exactly 0)."""
         g = self.strains(PROBE)
-        return [float(c * c) if c > 0 else (0.0 if gi == 0.0 else 1.0) for c, gi in zip(C0, g)]
+        return [0.0 if gi == 0.0 else 1.0 / S ** 2 for S, gi in zip(self.scales(), g)]
 
 
-def rod_material(function=None, *, quadratic=False, nonnegative=(), signed=(), check=None):
-    """Decorator: W*(N, M, **params) -> a factory params -> RodMaterial."""
+def rod_material(function=None, *, quadratic=False, nonnegative=(), signed=(), check=None, scales=None):
+    """Decorator: W*(N, M, **params) -> a factory params -> RodMaterial.  `check(params)`: a message
+    if the parameters do not fit together; `scales(params)`: {component: stress scale} where the
+    default 1/C0_ii is too wide (RodMaterial.scales)."""
     def wrap(f):
         cls = type(f.__name__, (RodMaterial,), {"quadratic": quadratic, "nonnegative": tuple(nonnegative),
-                                               "check": None if check is None else staticmethod(check)})
+                                               "check": None if check is None else staticmethod(check),
+                                               "stress_scales": None if scales is None else staticmethod(scales)})
         return materials.material(f, strains=2, signed=signed, cls=cls)
     return wrap(function) if function is not None else wrap
 
@@ -184,7 +199,8 @@ def _bending_compliances(p):
     return None
 
 
-@rod_material(nonnegative=COMPLIANCES, check=_bending_compliances)
+@rod_material(nonnegative=COMPLIANCES, check=_bending_compliances,
+              scales=lambda p: {4: p["kappa_lock"] / p["C_M2"], 5: p["kappa_lock"] / p["C_M3"]})
 def stiffening(N, M, C_N1, C_N2, C_N3, C_M1, C_M2, C_M3, kappa_lock):
     """Bending that stiffens with curvature up to a locking curvature kappa_lock (> 0):
 
@@ -226,7 +242,7 @@ def ramp_energy(x, delta):
     return (x * x + x ** 3 / (root + delta) + delta ** 2 * _asinh_minus_identity(x / delta)) / 4
 
 
-@rod_material(nonnegative=("C_N2", "C_N3", "C_M1", "C_M2", "C_M3"))
+@rod_material(nonnegative=("C_N2", "C_N3", "C_M1", "C_M2", "C_M3"), scales=lambda p: {0: p["delta"]})
 def asymmetric(N, M, C_N1, C_N2, C_N3, C_M1, C_M2, C_M3, C_N1c, delta):
     """Axial law stiffer in tension than in compression (or the reverse), e.g. a braided soft robot:
     axial compliance C_N1 in tension, C_N1c in compression, a smooth transition of width delta
