@@ -35,7 +35,7 @@ parameters = common(n_elements=8, dt=0.02, t_end=1.0) + [
     Parameter("moment_frame", "spatial", "", "the end moment is fixed in space or in the body",
               choices=("spatial", "body")),
 ] + material_parameters(EA=1e4, GA=1e4, GJ=EI, EI=EI, rhoA=0.0, rhoJ=(0.0, 0.0, 0.0),
-                      kappa_lock=1.0)
+                      kappa_lock=0.8)
 
 
 def build(p, comm):

@@ -68,6 +68,37 @@ the scheme is invariant under superposed rotations and the total angular
 momentum L = int rhoA phi x v + sum_i m_i d_i x w_i ds is conserved when no
 load acts.
 
+Materials (forms/rod_materials.py): a complementary energy W*(N, M), strains
+gamma = dW*/dN, kappa = dW*/dM (from the stress-free reference), stored energy
+U = N.gamma + M.kappa - W* (its Legendre transform), so d_t U = N.d_t gamma + M.d_t kappa
+and the compliance rows are d_t (dW*/dN) = R^T d_s v + J_N^T v_d, d_t (dW*/dM) = J_K v_d.
+
+* `linear` (or C_N, C_M given directly): the rows above, bit for bit (same forms).
+* a quadratic W* (e.g. `stretch_twist`, a non-diagonal C): C d_t (N, M) = strain
+  rate with C (N, M) = dW*/d(N, M), exact under both rules (H quadratic).
+* any other W*: dW*/d(N, M) is no polynomial, so it cannot be tested with DG1
+  functions.  The strains (gamma, kappa) become DG1 fields (starting at 0) and
+
+      int [(gamma_{n+1} - gamma_n)/h - (R^T v' + J_N^T v_d)_m] . dN = 0      (and kappa, M)
+      int [gamma_m - z_N] . dgamma + [kappa_m - z_M] . dkappa = 0,   (z_N, z_M) = the step's effort of W*
+
+  with the momentum rows on N_m, M_m as before.  With the discrete gradient,
+  z = Gonzalez' grad_bar W*(x_n, x_{n+1}) (rodfem/core/integrators.py, in the metric of
+  RodMaterial.weights), and testing the first rows with N_m (a DG1 function), the
+  second with N_{n+1} - N_n (DG1) gives
+
+      U_{n+1} - U_n = int N_m.(gamma_{n+1} - gamma_n) + (N_{n+1} - N_n).gamma_m - (W*_{n+1} - W*_n)
+                    = h int N_m.(strain rate)_m + int (N_{n+1} - N_n).z_N - (W*_{n+1} - W*_n) = h N_m.(strain rate)_m,
+
+  so H_{n+1} - H_n = h y.u exactly, whatever W* (with the same quadrature rule
+  in H and the residual).  With the midpoint rule z = dW*(x_m) leaves
+  int dW*(x_m).dx - (W*_{n+1} - W*_n) = O(|dx|^3) per step.  The strain fields are
+  the compatible ones: gamma_n - Pi(Gamma(q_n)) stays constant (as C_N N above).
+  N_n at the time levels meets dW*/dN(N_n) = gamma_n only to O(h^2) (the rows tie
+  the midpoint values); the history's H is U(N_n, gamma_n) as defined above.
+  A component of zero compliance (W* does not depend on it) has weight 0 in the
+  discrete gradient: its strain stays 0 and its stress is a multiplier.
+
 Viscoelasticity (generalized Maxwell in compliance form, forms/viscoelastic.py):
 `branches` = [maxwell(tau_k, C_N=..., C_M=...), ...] adds per branch k its
 stress resultants N_k and/or M_k (fields "N_k", "M_k", DG1, starting at 0:
@@ -202,7 +233,8 @@ def maxwell(tau, C_N=None, C_M=None):
 
 class CosseratRod:
     """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
-    about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0).
+    about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0),
+    or a `material` W*(N, M) (forms/rod_materials.py; then C_N, C_M are its small-strain diagonal).
     """
     supports = {"clamped": ["r", *DIRECTORS, "v", *RATES, "lam"], "pinned": ["r", "v"]}
     position = "r"
