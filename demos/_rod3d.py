@@ -7,7 +7,7 @@ import numpy as np
 from rodfem import Load
 from rodfem.app.scene import Parameter, density
 from rodfem.errors import ParameterError
-from rodfem.forms import cosserat_rod
+from rodfem.forms import cosserat_rod, rod_materials
 
 # Newton options of the 3D rod scenes: a chord Newton that reuses the
 # Jacobian and its LU over up to 8 iterations, across steps (the 102 x 102
@@ -24,9 +24,20 @@ def compliance(name, default, unit, doc):
     return Parameter(name, default, unit, doc, low=0)
 
 
-def material_parameters(EA, GA, GJ, EI, rhoA, rhoJ):
-    """C_N = (1/EA, 1/GA, 1/GA), C_M = (1/GJ, 1/EI, 1/EI), line density rhoA, rotary inertia rhoJ_1..3."""
+def material_parameters(EA, GA, GJ, EI, rhoA, rhoJ, kappa_lock=10.0, delta=1.0):
+    """The material law (forms/rod_materials.py) with C_N = (1/EA, 1/GA, 1/GA), C_M = (1/GJ, 1/EI, 1/EI)
+    (small-strain; the axial one in tension for 'asymmetric') and each law's own parameters,
+    line density rhoA, rotary inertia rhoJ_1..3."""
     return [
+        Parameter("material", "linear", "", "complementary energy W*(N, M) (forms/rod_materials.py)",
+                  choices=tuple(rod_materials.MATERIALS)),
+        Parameter("coupling", 0.5, "", "stretch-twist: C_NM = coupling sqrt(C_N1 C_M1)", low=-1, high=1),
+        Parameter("kappa_lock", kappa_lock, "1/m", "stiffening: locking curvature of the bending law",
+                  low=0, low_open=True),
+        Parameter("compression_ratio", 4.0, "", "asymmetric: axial compliance in compression / in tension",
+                  low=0, low_open=True),
+        Parameter("delta", delta, "N", "asymmetric: width of the tension-compression transition in N_1",
+                  low=0, low_open=True),
         compliance("C_N1", 1.0 / EA, "1/N", "axial compliance 1/EA (0: inextensible)"),
         compliance("C_N2", 1.0 / GA, "1/N", "shear compliance 1/GA_2 (0: shear-rigid)"),
         compliance("C_N3", 1.0 / GA, "1/N", "shear compliance 1/GA_3 (0: shear-rigid)"),
@@ -47,8 +58,20 @@ def rod(p):
         cosserat_rod.director_masses(J)
     except ValueError:
         raise ParameterError(f"parameters 'rhoJ1..3' must satisfy rhoJ_k <= sum of the other two (got {J})") from None
-    return cosserat_rod.CosseratRod(p["rhoA"], J, [p[f"C_N{i}"] for i in (1, 2, 3)],
-                                    [p[f"C_M{i}"] for i in (1, 2, 3)])
+    return cosserat_rod.CosseratRod(p["rhoA"], J, material=material(p))
+
+
+def material(p):
+    """The rod material of the parameters p (a one-line ParameterError if they do not fit the law)."""
+    C = {k: p[k] for k in rod_materials.COMPLIANCES}
+    name = p.get("material", "linear")
+    extra = {"linear": {}, "stretch-twist": {"C_NM": p.get("coupling", 0.0) * np.sqrt(C["C_N1"] * C["C_M1"])},
+             "stiffening": {"kappa_lock": p.get("kappa_lock")},
+             "asymmetric": {"C_N1c": p.get("compression_ratio", 1.0) * C["C_N1"], "delta": p.get("delta")}}[name]
+    try:
+        return rod_materials.MATERIALS[name](**C, **extra)
+    except ValueError as e:
+        raise ParameterError(f"parameter 'material' = {name}: {e}") from None
 
 
 def straight(start, directors, omega=(0.0, 0.0, 0.0), velocity=(0.0, 0.0, 0.0)):

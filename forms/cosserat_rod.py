@@ -68,6 +68,37 @@ the scheme is invariant under superposed rotations and the total angular
 momentum L = int rhoA phi x v + sum_i m_i d_i x w_i ds is conserved when no
 load acts.
 
+Materials (forms/rod_materials.py): a complementary energy W*(N, M), strains
+gamma = dW*/dN, kappa = dW*/dM (from the stress-free reference), stored energy
+U = N.gamma + M.kappa - W* (its Legendre transform), so d_t U = N.d_t gamma + M.d_t kappa
+and the compliance rows are d_t (dW*/dN) = R^T d_s v + J_N^T v_d, d_t (dW*/dM) = J_K v_d.
+
+* `linear` (or C_N, C_M given directly): the rows above, bit for bit (same forms).
+* a quadratic W* (e.g. `stretch_twist`, a non-diagonal C): C d_t (N, M) = strain
+  rate with C (N, M) = dW*/d(N, M), exact under both rules (H quadratic).
+* any other W*: dW*/d(N, M) is no polynomial, so it cannot be tested with DG1
+  functions.  The strains (gamma, kappa) become DG1 fields (starting at 0) and
+
+      int [(gamma_{n+1} - gamma_n)/h - (R^T v' + J_N^T v_d)_m] . dgamma = 0      (and kappa)
+      int [gamma_m - z_N] . dN + [kappa_m - z_M] . dM = 0,   (z_N, z_M) = the step's effort of W*
+
+  with the momentum rows on N_m, M_m as before.  With the discrete gradient,
+  z = Gonzalez' grad_bar W*(x_n, x_{n+1}) (rodfem/core/integrators.py, in the metric of
+  RodMaterial.weights), and testing the first rows with N_m (a DG1 function: gamma
+  and N share the space), the second with N_{n+1} - N_n (DG1) gives
+
+      U_{n+1} - U_n = int N_m.(gamma_{n+1} - gamma_n) + (N_{n+1} - N_n).gamma_m - (W*_{n+1} - W*_n)
+                    = h int N_m.(strain rate)_m + int (N_{n+1} - N_n).z_N - (W*_{n+1} - W*_n) = h N_m.(strain rate)_m,
+
+  so H_{n+1} - H_n = h y.u exactly, whatever W* (with the same quadrature rule
+  in H and the residual).  With the midpoint rule z = dW*(x_m) leaves
+  int dW*(x_m).dx - (W*_{n+1} - W*_n) = O(|dx|^3) per step.  The strain fields are
+  the compatible ones: gamma_n - Pi(Gamma(q_n)) stays constant (as C_N N above).
+  N_n at the time levels meets dW*/dN(N_n) = gamma_n only to O(h^2) (the rows tie
+  the midpoint values); the history's H is U(N_n, gamma_n) as defined above.
+  A component of zero compliance (W* does not depend on it) has weight 0 in the
+  discrete gradient: its strain stays 0 and its stress is a multiplier.
+
 Viscoelasticity (generalized Maxwell in compliance form, forms/viscoelastic.py):
 `branches` = [maxwell(tau_k, C_N=..., C_M=...), ...] adds per branch k its
 stress resultants N_k and/or M_k (fields "N_k", "M_k", DG1, starting at 0:
@@ -96,6 +127,7 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
+from rodfem.forms.rod_materials import COMPLIANCES, RodMaterial
 from rodfem.forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
@@ -201,7 +233,8 @@ def maxwell(tau, C_N=None, C_M=None):
 
 class CosseratRod:
     """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
-    about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0).
+    about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0),
+    or a `material` W*(N, M) (forms/rod_materials.py; then C_N, C_M are its small-strain diagonal).
     """
     supports = {"clamped": ["r", *DIRECTORS, "v", *RATES, "lam"], "pinned": ["r", "v"]}
     position = "r"
@@ -221,13 +254,33 @@ class CosseratRod:
               "N": ("stress resultants N on (d1, d2, d3): axial and shear forces (the state's field)",
                     ("axial", "shear2", "shear3")),
               "M": ("moments M on (d1, d2, d3): torsion and bending moments (the state's field)",
-                    ("torsion", "bend2", "bend3"))}
+                    ("torsion", "bend2", "bend3")),
+              "gamma": ("strains gamma = dW*/dN from the stress-free reference (the state's field; "
+                        "non-quadratic materials only)", ("axial", "shear2", "shear3")),
+              "kappa": ("curvatures kappa = dW*/dM from the stress-free reference (the state's field; "
+                        "non-quadratic materials only)", ("torsion", "bend2", "bend3"))}
 
-    def __init__(self, rhoA, rhoJ, C_N, C_M, branches=()):
+    def __init__(self, rhoA, rhoJ, C_N=None, C_M=None, branches=(), material=None):
         self.rhoA = float(rhoA)
         if not self.rhoA >= 0:  # also NaN
             raise ValueError(f"CosseratRod: rhoA must be a number >= 0 (got {rhoA!r})")
         self.masses = director_masses(rhoJ)
+        if material is None:
+            if C_N is None or C_M is None:
+                raise ValueError("CosseratRod: give the compliances C_N, C_M or a material (forms/rod_materials.py)")
+        elif not isinstance(material, RodMaterial):
+            raise TypeError(f"material must be a rod material (forms/rod_materials.py), got {material!r}")
+        elif C_N is not None or C_M is not None:
+            raise ValueError("CosseratRod: give either the compliances C_N, C_M or a material, not both")
+        elif type(material).__name__ == "linear":   # the diagonal law: today's rows, bit for bit
+            C_N, C_M = [material.params[k] for k in COMPLIANCES[:3]], [material.params[k] for k in COMPLIANCES[3:]]
+            material = None
+        # material None: the diagonal linear law with C_N, C_M (constants "C_N1", ...);
+        # otherwise W*(N, M) of the material, C_N, C_M its small-strain (diagonal) compliances
+        self.material = material
+        if material is not None:
+            C0 = np.diag(material.compliance())
+            C_N, C_M = C0[:3], C0[3:]
         self.C_N, self.C_M = (np.asarray(c, dtype=float) for c in (C_N, C_M))
         if self.C_N.shape != (3,) or self.C_M.shape != (3,) or np.any(self.C_N < 0) or np.any(self.C_M < 0):
             raise ValueError("compliances C_N, C_M must be three numbers >= 0 each")
@@ -238,6 +291,9 @@ class CosseratRod:
         v3 = (3,)
         self.fields = ([Field(n, "P", 2, v3) for n in ("r", *DIRECTORS, "v", *RATES)]
                        + [Field("N", "DG", 1, v3), Field("M", "DG", 1, v3), Field("lam", "P", 2, (6,))])
+        if self.general:   # the strains conjugate to N, M (module docstring: non-quadratic materials)
+            self.fields += [Field("gamma", "DG", 1, v3), Field("kappa", "DG", 1, v3)]
+            self.dg_weights = ParameterSet(**{f"w{i}": w for i, w in enumerate(material.weights())})
         # Maxwell branches: their stress resultants are internal variables, their
         # compliances and 1/tau run-time constants
         self.branches = active(branches)
@@ -248,6 +304,25 @@ class CosseratRod:
             self.branch_parameters.append(ParameterSet(inv_tau=inv_tau, **{
                 f"C_{name}{i + 1}": c for name, cs in b.spring.items() for i, c in enumerate(cs)}))
 
+    @property
+    def general(self):
+        """True for a non-quadratic material W*(N, M): strain fields and the discrete gradient of W*."""
+        return self.material is not None and not self.material.quadratic
+
+    def _complementary(self, N, M):
+        """W*(N, M) of the material (its parameters: constants on the mesh of N)."""
+        return self.material(N, M)
+
+    def _compliance_rows(self, Ndot, Mdot, domain):
+        """(C_N Ndot, C_M Mdot) of a quadratic law: the diagonal constants, or dW*/d(N, M) at the rates."""
+        if self.material is None:
+            _, _, C_N, C_M = self._constants(domain)
+            return C_N * Ndot, C_M * Mdot
+        X = ufl.variable(ufl.as_vector([Ndot[i] for i in range(3)] + [Mdot[i] for i in range(3)]))
+        g = ufl.diff(self._complementary(ufl.as_vector([X[i] for i in range(3)]),
+                                         ufl.as_vector([X[i] for i in range(3, 6)])), X)
+        return ufl.as_vector([g[i] for i in range(3)]), ufl.as_vector([g[i] for i in range(3, 6)])
+
     def _constants(self, domain):
         """(rhoA, director masses m_1..3, C_N, C_M) as UFL constants on `domain`."""
         c = self.parameters.on(domain)
@@ -256,11 +331,18 @@ class CosseratRod:
         return c["rhoA"], [c[f"m{i + 1}"] for i in range(3)], diag("C_N"), diag("C_M")
 
     def hamiltonian(self, x, dx, ds):
-        """H = int 1/2 rhoA |v|^2 + 1/2 sum m_i |w_i|^2 + 1/2 N.C_N N + 1/2 M.C_M M ds."""
+        """H = int 1/2 rhoA |v|^2 + 1/2 sum m_i |w_i|^2 + U ds,  U = 1/2 N.C_N N + 1/2 M.C_M M (linear),
+        W*(N, M) (quadratic material), N.gamma + M.kappa - W*(N, M) (any other material)."""
         rhoA, masses, C_N, C_M = self._constants(dx.ufl_domain())
         kin = 0.5 * rhoA * ufl.inner(x["v"], x["v"])
         kin += sum(0.5 * m * ufl.inner(x[n], x[n]) for m, n in zip(masses, RATES))
-        pot = 0.5 * ufl.inner(x["N"], C_N * x["N"]) + 0.5 * ufl.inner(x["M"], C_M * x["M"])
+        if self.material is None:
+            pot = 0.5 * ufl.inner(x["N"], C_N * x["N"]) + 0.5 * ufl.inner(x["M"], C_M * x["M"])
+        elif self.material.quadratic:
+            pot = self._complementary(x["N"], x["M"])
+        else:
+            pot = (ufl.inner(x["N"], x["gamma"]) + ufl.inner(x["M"], x["kappa"])
+                   - self._complementary(x["N"], x["M"]))
         for field, C, _ in self._branch_terms(dx.ufl_domain()):
             pot = pot + 0.5 * ufl.inner(x[field], C * x[field])
         return (kin + pot) * dx
@@ -306,8 +388,18 @@ class CosseratRod:
         F += ufl.inner(constraint_rate(d, w), dlam) * dxG
         # compliance equations in rate form
         gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
-        F += (ufl.inner(C_N * step.rate("N") - gamma_rate, dN)
-              + ufl.inner(C_M * step.rate("M") - curvature_rate(d, w), dM)) * dx
+        if not self.general:   # quadratic: C d_t (N, M) = strain rate
+            CN_rate, CM_rate = self._compliance_rows(step.rate("N"), step.rate("M"), dx.ufl_domain())
+            F += (ufl.inner(CN_rate - gamma_rate, dN) + ufl.inner(CM_rate - curvature_rate(d, w), dM)) * dx
+        else:   # d_t (gamma, kappa) = strain rate, (gamma, kappa)_m = the step's effort of W*(N, M)
+            c = self.dg_weights.on(dx.ufl_domain())
+            zN, zM = step.effort(self._complementary, ["N", "M"], weights=[c[f"w{i}"] for i in range(6)])
+            # (tested with dgamma, resp. dN: the same equations as the other way round, but every
+            # row then has its own dof on the diagonal -- mass/h, resp. -d^2 W*/dN^2/2 -- and the
+            # LU needs no multiplier ordering for N, M: 8x cheaper per iteration at 16 elements)
+            F += (ufl.inner(step.rate("gamma") - gamma_rate, test["gamma"])
+                  + ufl.inner(step.rate("kappa") - curvature_rate(d, w), test["kappa"])
+                  + ufl.inner(step.mid("gamma") - zN, dN) + ufl.inner(step.mid("kappa") - zM, dM)) * dx
         for field, C, inv_tau in branches:   # C_k (d_t N_k + N_k/tau_k) = strain rate, times tau_k/(tau_k + h)
             rate = gamma_rate if field.startswith("N") else curvature_rate(d, w)
             F += row_scale(step, inv_tau) * ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate,
@@ -356,15 +448,22 @@ class CosseratRod:
     # with q_ref the reference state (the body's initial state).  They are exactly the
     # invariants the rate form keeps (module docstring): a static solution is a rest
     # state of the time stepping.
-    static_fields = ("N", "M", "lam")
+    @property
+    def static_fields(self):
+        """The test fields of the rate rows: (N, M, lam), or (gamma, kappa, lam) for a non-quadratic material."""
+        return ("gamma", "kappa", "lam") if self.general else ("N", "M", "lam")
 
     def static_rows(self, x, ref, test, dx, ds):
-        _, _, C_N, C_M = self._constants(dx.ufl_domain())
         d, d0 = [x[n] for n in DIRECTORS], [ref[n] for n in DIRECTORS]
         gamma = shear_strain(x["r"], d) - shear_strain(ref["r"], d0)
         kappa = curvature(d) - curvature(d0)
-        F = (ufl.inner(C_N * (x["N"] - ref["N"]) - gamma, test["N"])
-             + ufl.inner(C_M * (x["M"] - ref["M"]) - kappa, test["M"])) * dx
+        if self.general:   # (gamma, kappa) - their reference = the strains; dW*/d(N, M) = (gamma, kappa) is a residual row
+            eN, eM = x["gamma"] - ref["gamma"], x["kappa"] - ref["kappa"]
+            tN, tM = test["gamma"], test["kappa"]
+        else:
+            eN, eM = self._compliance_rows(x["N"] - ref["N"], x["M"] - ref["M"], dx.ufl_domain())
+            tN, tM = test["N"], test["M"]
+        F = (ufl.inner(eN - gamma, tN) + ufl.inner(eM - kappa, tM)) * dx
         return F + ufl.inner(orthonormality(d), test["lam"]) * gll(dx)
 
     def momentum(self, x):

@@ -85,7 +85,7 @@ class RestStep(Step):
             return self.rates[name]
         return ufl.zero(*self.x1[name].ufl_shape)
 
-    def effort(self, energy, names):
+    def effort(self, energy, names, weights=None):
         like = [self.x1[n] for n in names]
         X = ufl.variable(flatten(like))
         return unflatten(ufl.diff(energy(*unflatten(X, like)), X), like)

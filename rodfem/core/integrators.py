@@ -26,6 +26,12 @@ With z tested in the space of the strain rows, H_{n+1} - H_n = h y.u follows
 not a field (a contact's gap, a squared distance): midpoint W'(a(x_m)); discrete gradient the
 difference quotient [W(a_{n+1}) - W(a_n)] / (a_{n+1} - a_n), with the Taylor term
 W'(a_bar) + W^(3)(a_bar) da^2 / 24 where |da| <= a threshold the caller gives in the units of a.
+
+``weights`` (optional, numbers >= 0 per component, default all 1) make the
+correction act in a weighted metric, z = dW(x_m) + bracket (w dx)/(dx.w dx):
+still z . dx = W(x_{n+1}) - W(x_n) if W does not depend on the components of
+weight 0 (their effort is then dW/dx_i = 0 exactly, e.g. a constrained strain
+whose stress is a multiplier).
 """
 import ufl
 
@@ -76,19 +82,21 @@ class Step:
         """(x_{n+1} - x_n)/h."""
         return (self.x1[name] - self.x0[name]) / self.h
 
-    def effort(self, energy, names):
-        """Co-energies z_i of the energy density `energy(*x_names)`, one per name."""
+    def effort(self, energy, names, weights=None):
+        """Co-energies z_i of the energy density `energy(*x_names)`, one per name (`weights`: the
+        metric of the discrete gradient's correction, one number or UFL constant per component)."""
         like = [self.x0[n] for n in names]
         X0, X1 = flatten(like), flatten([self.x1[n] for n in names])
         Xm = ufl.variable(0.5 * (X0 + X1))
         grad = ufl.diff(energy(*unflatten(Xm, like)), Xm)
         if self.rule == "discrete-gradient":
             dX = X1 - X0
-            dX2 = ufl.inner(dX, dX)
+            wdX = dX if weights is None else ufl.as_vector([w * dX[i] for i, w in enumerate(weights)])
+            dX2 = ufl.inner(dX, wdX)
             dW = energy(*unflatten(X1, like)) - energy(*unflatten(X0, like))
             d3W = ufl.inner(ufl.diff(ufl.inner(ufl.diff(ufl.inner(grad, dX), Xm), dX), Xm), dX)
             bracket = ufl.conditional(ufl.gt(dX2, DG_THRESHOLD ** 2), dW - ufl.inner(grad, dX), d3W / 24.0)
-            grad = grad + bracket / ufl.conditional(ufl.gt(dX2, 0.0), dX2, 1.0) * dX
+            grad = grad + bracket / ufl.conditional(ufl.gt(dX2, 0.0), dX2, 1.0) * wdX
         return unflatten(grad, like)
 
     def scalar_effort(self, energy, a0, a1, am, threshold):
