@@ -319,15 +319,46 @@ class System:
         for r in self.bodies.values():
             r.body.set_time(t)
 
-    def predict(self, previous):
-        """Newton's start x_{n+1}^0 = 2 x_n - x_{n-1} (x_n if `previous` is None); x_n is read from
-        the bodies (a change made to a body's x0 between steps takes effect)."""
+    def predict(self, previous, ratio=1.0):
+        """Newton's start x_{n+1}^0 = x_n + r (x_n - x_{n-1}), r = h_n / h_{n-1} (`ratio`; 2 x_n - x_{n-1}
+        for equal steps), x_n if `previous` is None; x_n is read from the bodies (a change made to a
+        body's x0 between steps takes effect)."""
         self.build()
         self._pull(self.X0, "x0")
         if previous is None:
             self.X0.copy(self.X1)
-        else:
+        elif ratio == 1.0:
             self.X1.getArray()[:] = 2.0 * self.X0.getArray(readonly=True) - previous
+        else:
+            x0 = self.X0.getArray(readonly=True)
+            self.X1.getArray()[:] = x0 + ratio * (x0 - previous)
+
+    def snapshot(self):
+        """What a step changes of the loop's state: x_n and the control laws' states (`restore` puts them back:
+        a rejected step of the step-size control, rodfem/analysis/stepping.py)."""
+        self.build()
+        return (self.X0.getArray(readonly=True).copy(),
+                [list(c.law.state) for c in self.components if getattr(c, "stateful", False)])
+
+    def restore(self, snapshot):
+        """x_n = x_{n+1} and the control laws' states of `snapshot`."""
+        x, states = snapshot
+        self.X0.getArray()[:] = x
+        self.X0.copy(self.X1)
+        self._push(self.X0, "x0")
+        self._push(self.X1, "x1")
+        for c, state in zip([c for c in self.components if getattr(c, "stateful", False)], states):
+            c.law.state = list(state)
+
+    def state_scale(self):
+        """The number of the loop's unknowns owned here that are the bodies' (the multipliers after them are left
+        out of the step-size control's error: they are the constraint forces, algebraic, of another order)."""
+        self.build()
+        return self.layout.offsets[-2]
+
+    def state(self):
+        """x_{n+1} as an array (the owned entries of this rank)."""
+        return self.X1.getArray(readonly=True).copy()
 
     def solve(self, step: int, t: float) -> Solve:
         """x_{n+1} at time t by Newton (raises NewtonFailure)."""
