@@ -350,11 +350,19 @@ class System:
         for c, state in zip([c for c in self.components if getattr(c, "stateful", False)], states):
             c.law.state = list(state)
 
-    def state_scale(self):
-        """The number of the loop's unknowns owned here that are the bodies' (the multipliers after them are left
-        out of the step-size control's error: they are the constraint forces, algebraic, of another order)."""
+    def field_groups(self):
+        """The owned entries of the loop's state vector by body and field (a list of index arrays, the same
+        number on every rank): the step-size control (rodfem/analysis/stepping.py) measures each field against
+        its own size.  The multipliers (constraint forces, algebraic) are left out."""
         self.build()
-        return self.layout.offsets[-2]
+        groups = []
+        for blk, ref in zip(self.blocks, self.bodies.values()):
+            body, owned = ref.body, blk.hi - blk.lo
+            for f in body.space.fields:
+                dofs = body.space.field_dofs(f.name) if body.rigid else body.space.collapse(f.name)[1]
+                dofs = np.asarray(dofs, dtype=np.int64).ravel()
+                groups.append(blk.lo + dofs[dofs < owned])
+        return groups
 
     def state(self):
         """x_{n+1} as an array (the owned entries of this rank)."""
