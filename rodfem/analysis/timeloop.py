@@ -231,7 +231,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
     """The adaptive loop of `run` (rodfem/analysis/stepping.py): step doubling from x_n, the two half steps
     kept when the error estimate is within the tolerance."""
     supplied, dissipated = sums
-    norm = ErrorNorm(problem, control.rtol, control.atol)
+    norm = ErrorNorm(problem, control.rtol, control.atol, t_end)
     outputs = sorted({float(x) for x in control.output_times if t_end > x} | {float(t_end)})
     while t < t_end:
         interrupts.check(problem.comm, n, t)
@@ -251,7 +251,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
                      "balance_error": H_a - H + d_a - w_a, "h": h_a, "error_estimate": 0.0, **problem.observe()}
             middle = problem.accept()
             its_b, H_b, w_b, d_b = one(h_b, t_mid, t_next, middle, h_b / h_a, n + 2)
-            err = norm(snap[0], problem.state(), coarse)
+            err = norm(snap[0], problem.state(), coarse, h)
         except NewtonFailure as e:
             problem.restore(snap)
             state.rejected += 1
