@@ -231,7 +231,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
     """The adaptive loop of `run` (rodfem/analysis/stepping.py): step doubling from x_n, the two half steps
     kept when the error estimate is within the tolerance."""
     supplied, dissipated = sums
-    norm = ErrorNorm(problem, control.rtol, control.atol, t_end)
+    norm = ErrorNorm(problem, control.rtol, control.atol, t_end if control.per_unit_step else None)
     outputs = sorted({float(x) for x in control.output_times if t_end > x} | {float(t_end)})
     while t < t_end:
         interrupts.check(problem.comm, n, t)
@@ -265,7 +265,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
             problem.restore(snap)
             state.rejected += 1
             state.after_reject = True
-            state.h = shrunk(h, err)
+            state.h = shrunk(h, err, control.per_unit_step)
             if state.h < h_min:
                 raise NewtonFailure(n + 1, t_next, float("nan"), 0, f"error estimate {err:.3g} times the tolerance "
                                     f"at step {h:.3g}: dt_min = {h_min:.3g} reached")
@@ -276,7 +276,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
         row_b = {"t": t_next, "H": H_b, "supplied": supplied, **({"dissipated": dissipated} if dissipates else {}),
                  "newton_its": its_b, "balance_error": H_b - H_a + d_b - w_b, "h": h_b, "error_estimate": err,
                  **problem.observe()}
-        step = next_step(h, err, state.after_reject)
+        step = next_step(h, err, state.after_reject, control.per_unit_step)
         state.h = max(step, proposed) if clipped and not state.after_reject else step
         state.after_reject = False
         state.h_prev = h_b

@@ -98,7 +98,8 @@ def step_control(p):
     frames = p.get("frames", 100)
     times = tuple(np.linspace(0.0, p["t_end"], frames).tolist()) if frames > 1 else (p["t_end"],)
     return StepControl(adaptive=adaptive, rtol=p.get("rtol", 1e-3), atol=p.get("atol", 1e-6),
-                       dt_min=p.get("dt_min", 0.0), output_times=times if adaptive else ())
+                       dt_min=p.get("dt_min", 0.0), output_times=times if adaptive else (),
+                       per_unit_step=p.get("error_per", "step") == "unit-step")
 
 
 CHECKPOINT_EVERY = Parameter("checkpoint_every", 0, "", "steps between checkpoints (0: none)", low=0)

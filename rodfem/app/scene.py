@@ -105,6 +105,8 @@ def stepping():
                   "frames' times are hit exactly)", choices=("false", "true")),
         Parameter("rtol", 1e-3, "", "adaptive: relative tolerance of a step's error, per field", low=0, low_open=True),
         Parameter("atol", 1e-6, "", "adaptive: absolute tolerance of a step's error", low=0),
+        Parameter("error_per", "step", "", "adaptive: the error controlled per step, or per unit step (the global "
+                  "error within the tolerance, at more steps)", choices=("step", "unit-step")),
         Parameter("dt_min", 0.0, "s", "smallest step: a fixed step whose Newton fails is split down to it, an "
                   "adaptive step shrinks down to it, then the run stops (0: dt/1024, adaptive 1e-9 t_end)", low=0),
     ]
