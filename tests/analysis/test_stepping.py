@@ -70,8 +70,8 @@ def test_adaptive_steps_meet_the_tolerance_of_an_exact_solution():
     """Step doubling with the midpoint rule on the linear oscillator, two periods: the position's error
     against the exact solution stays within rtol |x|_max over the run (the error controlled per unit
     step: measured 0.24 rtol |x|_max from rtol = 1e-2 to 1e-6; per step, the default, 2.7 to 68 rtol),
-    the steps are variable (their h in the history), the balance holds per step with its own h, and a looser rtol takes fewer steps (h ~ rtol^(1/2));
-    the steps land on t_end and on the output times."""
+    the steps are variable (their h in the history), the balance holds per step with its own h, a looser
+    rtol takes fewer steps (h ~ rtol^(1/2)), and the steps land on t_end and on the output times."""
     steps, times = {}, (0.0, 0.7, 2.5)
     for rtol in (1e-2, 1e-4):
         s = oscillator()
