@@ -52,6 +52,15 @@ def test_the_robot_arm_at_the_authors_step_completes_in_sub_steps(integrator):
     assert np.max(np.abs(Lz - p["M"] * np.minimum(t, p["t_load"]))) <= 1e-12 * 40
 
 
+def test_the_line_search_carries_the_robot_arm_at_dt_01():
+    """h = 0.1: Newton's full steps diverge at t = 7.7 (issue 25); the backtracking line search (the default)
+    converges in every step, no sub-steps needed, L_z exact."""
+    problem, p = arm(0.1)
+    result = run(problem, 0.1, 15.0)
+    assert result.stepping["rejected"] == 0 and result.stepping["substeps"] == 150
+    assert abs(result.rows[-1]["L_z"] - 40.0) <= 1e-9
+
+
 def oscillator():
     """A mass m = 2 on a Hookean spring k = 50 (rest length 1) to the ground, moving along the axis:
     x(t) = 1 + 0.3 cos 5t + 0.08 sin 5t, v = x'."""
