@@ -33,7 +33,8 @@ from rodfem.la.lu_chain import LU_CHAIN, PIVOTING, lu_name, mumps_options, next_
 # round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
 # ~ eps * stiffness, e.g. 2e-9 for EA = 1e7, while x is converged to the last digit).
 # Globalized by a backtracking line search (bt: the full step when it decreases |F| enough,
-# else a cubic backtrack).  Measured on the scenes' defaults (benchmarks/stepping.md): the
+# else a cubic backtrack).  Measured on the scenes' defaults (issue 25; three of them checked by
+# tests/analysis/test_stepping.py): the
 # same mean Newton iterations as the full steps of the basic line search on flying-spaghetti-2d/3d,
 # four-bar-2d, slider-crank-3d, crane-manoeuvre, roll-up-2d, cantilever-2d, spring-damper-chain,
 # robot-arm-control and flexible-robot-arm-2d (the full step is always taken there), while it
