@@ -52,6 +52,7 @@ CONTROL = "tests/models/test_control.py"
 JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
+STEPPING = "tests/analysis/test_stepping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -404,9 +405,9 @@ MUTATIONS = [
        "tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[viscoelastic-cantilever-3d-killed-two-steps-after-a-checkpoint]"],
       "the restart leaves the Maxwell branches' internal strains (C_1, Gamma_1, kappa_1, M_1) relaxed, not as checkpointed"),
     M("first-resumed-step-with-the-initial-inputs", "rodfem/analysis/timeloop.py",
-      [("            problem.set_time(t + 0.5 * dt)\n",
-        "            if start is None or n > first:   # the rebuilt scene's inputs u(0) in the first step after a restart\n"
-        "                problem.set_time(t + 0.5 * dt)\n")],
+      [("        problem.set_time(t + 0.5 * h)\n",
+        "        if start is None or step > first + 1:   # the rebuilt scene's inputs u(0) in the first step after a restart\n"
+        "            problem.set_time(t + 0.5 * h)\n")],
       ["tests/io/test_restart.py::test_every_file_of_a_resumed_dissipating_or_actuated_run[soft-arm-swing-killed-two-steps-after-a-checkpoint]"],
       "the chamber's pressure and the tendon's tension of the first step after a restart not set from the restored clock"),
     M("restart-without-the-newton-predictor", "rodfem/io/checkpoint.py",
@@ -568,6 +569,45 @@ MUTATIONS = [
       [('elif type(material).__name__ == "linear":', "elif False:")],
       ["tests/models/test_rod_materials.py::test_linear_material_is_the_compliance_form_bit_for_bit"],
       "the linear material through the generic quadratic rows: other compiled forms than before"),
+
+    # -- adaptive steps (issue 25) ----------------------------------------------------------------------
+    # Not yet caught (issue 25 stays open for it): no test fails a sub-step partway through a split, so
+    # "substeps-from-the-failed-state" (timeloop.py without `problem.restore(snap)` after a failed
+    # sub-step) survives; it comes back here with such a test.
+    M("substep-work-of-the-last-only", "rodfem/analysis/timeloop.py",
+      [("its, work, lost = its + s_its, work + w, lost + d", "its, work, lost = its + s_its, w, d")],
+      [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps"],
+      "a step done in sub-steps supplies only its last sub-step's work h y.u"),
+    M("inputs-at-the-step-start", "rodfem/analysis/timeloop.py",
+      [("        problem.set_time(t + 0.5 * h)\n", "        problem.set_time(t)\n")],
+      [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps",
+       STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
+      "every (sub-)step reads its inputs at its start, not at its midpoint"),
+    M("adaptive-accepts-every-step", "rodfem/analysis/timeloop.py",
+      [("        if err > 1.0:\n", "        if err > 1e300:\n")],
+      [STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
+      "the error estimate is computed but never rejects a step"),
+    M("adaptive-error-per-step-misscaled", "rodfem/analysis/stepping.py",
+      [("e = diff / (2 ** ORDER - 1) /", "e = diff / (2 ** ORDER + 7) /")],
+      [STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
+      "the Richardson estimate divided by 2^p + 7 instead of 2^p - 1: the error underestimated 3.7 times"),
+    M("adaptive-misses-the-output-times", "rodfem/analysis/timeloop.py",
+      [("        clipped = t + 1.1 * proposed >= target\n", "        clipped = t + proposed >= t_end\n")],
+      [STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
+      "adaptive steps step over the output times (the frames' times are not hit)"),
+    M("checkpoint-without-the-step-control", "rodfem/io/checkpoint.py",
+      [('                           stepping=meta.get("stepping") or None)', "                           stepping=None)")],
+      [STEPPING + "::test_a_resumed_adaptive_run_equals_the_uninterrupted_one"],
+      "a resumed adaptive run starts its step control afresh (first step dt, no predictor ratio, counts at 0)"),
+    M("no-line-search", "rodfem/nls/newton.py",
+      [('DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "bt",',
+        'DEFAULTS = {"snes_type": "newtonls", "snes_linesearch_type": "basic",')],
+      [STEPPING + "::test_the_line_search_carries_the_robot_arm_at_dt_01"],
+      "Newton's full steps again: the robot arm at h = 0.1 needs sub-steps"),
+    M("no-minimum-step", "rodfem/analysis/timeloop.py",
+      [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
+      [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
+      "a failing step is split without the stated minimum dt_min"),
 ]
 
 

@@ -101,6 +101,11 @@ def cmd_run(args):
         f"({summary['time_per_step_ms']:.3f} ms/step, {summary['newton_its_mean']:.2f} Newton its/step), "
         f"max |{balance}| = {summary['max_balance_error']:.2e} "
         f"({summary['max_balance_error_relative']:.1e} of max |H|)")
+    control = summary.get("step_control", {})
+    if control.get("adaptive") or control.get("rejected"):
+        say(f"step control: {control['rejected']} steps rejected or failed"
+            + (f", {control['split_steps']} steps done in sub-steps ({control['substeps']} sub-steps in all)"
+               if not control["adaptive"] else ""))
     say(f"results in {out}/: history.csv, summary.json, centreline.pvd and surface.pvd (ParaView), "
         f"fields.json, animation.gif, shapes.png, energy.png")
 

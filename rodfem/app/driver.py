@@ -3,8 +3,10 @@ import os
 import time
 from contextlib import nullcontext, suppress
 
+import numpy as np
 from mpi4py import MPI
 
+from rodfem.analysis.stepping import StepControl, StepState
 from rodfem.analysis.timeloop import Result, run, steps_for
 from rodfem.app.scene import Parameter, Scene, load
 from rodfem.common import interrupts
@@ -39,11 +41,14 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
     if not isinstance(scene, Scene):
         scene = load(scene)
     p = scene.values(overrides)
+    control = step_control(p)
     try:
-        n_steps = steps_for(p["dt"], p["t_end"])
+        n_steps = None if control.adaptive else steps_for(p["dt"], p["t_end"])
     except ValueError as e:
         raise ParameterError(f"parameter 'dt': {e}") from None
-    if continues and saved[0]["step"] > n_steps:
+    if control.adaptive and p["dt"] > p["t_end"]:
+        raise ParameterError(f"parameter 'dt': the first step {p['dt']:g} is longer than t_end = {p['t_end']:g}")
+    if continues and (saved[0]["t"] > p["t_end"] if control.adaptive else saved[0]["step"] > n_steps):
         raise ParameterError(f"parameter 't_end': {p['t_end']:g} is before the checkpoint's time {saved[0]['t']:g} "
                              f"(--resume continues to a later t_end)")
     if out:
@@ -57,18 +62,21 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         problem = problem or build(scene, p, comm, outdir, started)
         if start and outdir:
             rows = checkpoint.truncate_history(outdir, kept)
-            result = Result(rows=rows, steps=start.step)
+            result = Result(rows=rows, steps=start.step,   # (its step control's counts: those at the checkpoint)
+                            stepping=dict(StepState.from_dict(start.stepping).to_dict(), adaptive=control.adaptive,
+                                          dt_min=control.minimum(p["dt"], p["t_end"])))
             writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t,
-                                           p.get("section", 0.0))
+                                           p.get("section", 0.0), control.output_times or None)
         else:
             result = Result(steps=start.step if start else 0)
-            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0))
-                      if outdir else None)
+            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0),
+                                control.output_times or None) if outdir else None)
         saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
         try:
-            if not (start and start.step == n_steps):   # a checkpoint at t_end: nothing left to run
+            if not (start and (start.t >= p["t_end"] if control.adaptive else start.step == n_steps)):
+                # (a checkpoint at t_end: nothing left to run)
                 run(problem, p["dt"], p["t_end"], writer=writer, progress=progress, result=result, start=start,
-                    after_step=saver)
+                    after_step=saver, control=control)
         except (*STOPS, MemoryError) as error:
             stop = out_of_memory(error) if isinstance(error, MemoryError) else error
             status, failure = stopped(stop)
@@ -82,6 +90,16 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         if writer:
             writer.finish(summary, result)
     return result, summary
+
+
+def step_control(p):
+    """The time loop's StepControl of the parameters `p` (adaptive: the frames' times are its output times)."""
+    adaptive = p.get("adaptive", "false") == "true"
+    frames = p.get("frames", 100)
+    times = tuple(np.linspace(0.0, p["t_end"], frames).tolist()) if frames > 1 else (p["t_end"],)
+    return StepControl(adaptive=adaptive, rtol=p.get("rtol", 1e-3), atol=p.get("atol", 1e-6),
+                       dt_min=p.get("dt_min", 0.0), output_times=times if adaptive else (),
+                       per_unit_step=p.get("error_per", "step") == "unit-step")
 
 
 CHECKPOINT_EVERY = Parameter("checkpoint_every", 0, "", "steps between checkpoints (0: none)", low=0)

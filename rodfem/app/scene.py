@@ -87,13 +87,28 @@ def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
     """The parameters every scene has."""
     return [
         Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
-        Parameter("dt", dt, "s", "time step h", low=0, low_open=True),
+        Parameter("dt", dt, "s", "time step h (adaptive=true: the first step)", low=0, low_open=True),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
         Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
                   "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
         Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
                   "(height: half of it; 0: a 25th of the longest body)", low=0),
+        *stepping(),
+    ]
+
+
+def stepping():
+    """The step control's parameters (rodfem/analysis/stepping.py)."""
+    return [
+        Parameter("adaptive", "false", "", "adaptive time steps to the tolerances rtol, atol (step doubling; the "
+                  "frames' times are hit exactly)", choices=("false", "true")),
+        Parameter("rtol", 1e-3, "", "adaptive: relative tolerance of a step's error, per field", low=0, low_open=True),
+        Parameter("atol", 1e-6, "", "adaptive: absolute tolerance of a step's error", low=0),
+        Parameter("error_per", "step", "", "adaptive: the error controlled per step, or per unit step (the global "
+                  "error within the tolerance, at more steps)", choices=("step", "unit-step")),
+        Parameter("dt_min", 0.0, "s", "smallest step: a fixed step whose Newton fails is split down to it, an "
+                  "adaptive step shrinks down to it, then the run stops (0: dt/1024, adaptive 1e-9 t_end)", low=0),
     ]
 
 

@@ -326,15 +326,54 @@ class System:
         for r in self.bodies.values():
             r.body.set_time(t)
 
-    def predict(self, previous):
-        """Newton's start x_{n+1}^0 = 2 x_n - x_{n-1} (x_n if `previous` is None); x_n is read from
-        the bodies (a change made to a body's x0 between steps takes effect)."""
+    def predict(self, previous, ratio=1.0):
+        """Newton's start x_{n+1}^0 = x_n + r (x_n - x_{n-1}), r = h_n / h_{n-1} (`ratio`; 2 x_n - x_{n-1}
+        for equal steps), x_n if `previous` is None; x_n is read from the bodies (a change made to a
+        body's x0 between steps takes effect)."""
         self.build()
         self._pull(self.X0, "x0")
         if previous is None:
             self.X0.copy(self.X1)
-        else:
+        elif ratio == 1.0:
             self.X1.getArray()[:] = 2.0 * self.X0.getArray(readonly=True) - previous
+        else:
+            x0 = self.X0.getArray(readonly=True)
+            self.X1.getArray()[:] = x0 + ratio * (x0 - previous)
+
+    def snapshot(self):
+        """What a step changes of the loop's state: x_n and the control laws' states (`restore` puts them back:
+        a rejected step of the step-size control, rodfem/analysis/stepping.py)."""
+        self.build()
+        return (self.X0.getArray(readonly=True).copy(),
+                [list(c.law.state) for c in self.components if getattr(c, "stateful", False)])
+
+    def restore(self, snapshot):
+        """x_n = x_{n+1} and the control laws' states of `snapshot`."""
+        x, states = snapshot
+        self.X0.getArray()[:] = x
+        self.X0.copy(self.X1)
+        self._push(self.X0, "x0")
+        self._push(self.X1, "x1")
+        for c, state in zip([c for c in self.components if getattr(c, "stateful", False)], states):
+            c.law.state = list(state)
+
+    def field_groups(self):
+        """The owned entries of the loop's state vector by body and field (a list of index arrays, the same
+        number on every rank): the step-size control (rodfem/analysis/stepping.py) measures each field against
+        its own size.  The multipliers (constraint forces, algebraic) are left out."""
+        self.build()
+        groups = []
+        for blk, ref in zip(self.blocks, self.bodies.values()):
+            body, owned = ref.body, blk.hi - blk.lo
+            for f in body.space.fields:
+                dofs = body.space.field_dofs(f.name) if body.rigid else body.space.collapse(f.name)[1]
+                dofs = np.asarray(dofs, dtype=np.int64).ravel()
+                groups.append(blk.lo + dofs[dofs < owned])
+        return groups
+
+    def state(self):
+        """x_{n+1} as an array (the owned entries of this rank)."""
+        return self.X1.getArray(readonly=True).copy()
 
     def solve(self, step: int, t: float) -> Solve:
         """x_{n+1} at time t by Newton (raises NewtonFailure)."""

@@ -8,8 +8,10 @@ holds everything the next step depends on:
 
 * the state x_n of every body (all fields) and the system's multipliers,
 * x_{n-1}, from which Newton starts (x_{n+1}^0 = 2 x_n - x_{n-1}),
-* the step n, t_n = n dt, H(x_n), the supplied work so far, the LU package
-  Newton has switched to (PETSc's LU -> SuperLU/MUMPS after a zero pivot),
+* the step n, t_n (n dt, or the adaptive run's own time), H(x_n), the supplied work so far, the LU
+  package Newton has switched to (PETSc's LU -> SuperLU/MUMPS after a zero pivot), the step
+  control's state (rodfem/analysis/stepping.py: the last step h_{n-1} for the predictor, the number of
+  sub-steps a fixed step starts with, an adaptive run's next step and its counts),
 * the scene, its parameters, N and the rodfem version,
 
 stored independently of the partition (each dof by field, component and
@@ -194,35 +196,44 @@ class Saver:
         self.every, self.n_steps = int(every), n_steps
         self.layout = Layout(problem)
         self.comm = problem.comm
+        self.last = None
 
-    def __call__(self, n, previous, H, supplied, dissipated=0.0):
-        if n % self.every:
+    def __call__(self, n, previous, H, supplied, dissipated=0.0, stepping=None):
+        """After step n; `stepping`: the step control's state and t (an adaptive run calls this after every
+        second step: the checkpoint is written at the first call past each multiple of `every`)."""
+        last, self.last = (n - 1 if self.last is None else self.last), n
+        if n // self.every == last // self.every:
             return
+        t = stepping["t"] if stepping else n * self.problem.dt
         save(self.outdir, self.problem, self.layout, n, previous, H, supplied,
              {"scene": self.scene, "parameters": self.params, "checkpoint_every": self.every},
-             dissipated=dissipated)
+             dissipated=dissipated, stepping=stepping)
         self.problem.newton.restart()
-        if n != self.n_steps:   # how far it got, if it is killed now
+        if n != self.n_steps and not (stepping and t >= self.params["t_end"]):   # how far it got, if killed now
             from rodfem.io.output import write_json
-            status = {"scene": self.scene, "status": "running", "steps": n, "t": n * self.problem.dt,
+            status = {"scene": self.scene, "status": "running", "steps": n, "t": t,
                       "n_steps": self.n_steps, "checkpoint": {"step": n, "file": NAME},
                       "resume": f"rodfem run --resume {self.out}", "parameters": self.params,
                       "mpi_ranks": self.comm.size, "pid": os.getpid()}
             self.outdir.do("write summary.json", write_json, self.outdir.file("summary.json"), status)
 
 
-def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0):
-    """Write the checkpoint of step n into `out` (an OutDir or a directory path; collective)."""
+def save(out, problem, layout, n, previous, H, supplied, meta, dissipated=0.0, stepping=None):
+    """Write the checkpoint of step n into `out` (an OutDir or a directory path; collective).  `stepping`:
+    the step control's state (rodfem/analysis/stepping.py) with the time t of step n (else t = n dt)."""
     from rodfem._version import __version__
     comm = problem.comm
     dt = problem.dt
+    stepping = dict(stepping or {})
+    t = stepping.pop("t", n * dt)
     arrays, lam = layout.split(layout.current())
     data = {"x": _pack(problem, arrays, comm), "x_lam": _gather_lam(comm, lam)}
     if previous is not None:
         parrays, plam = layout.split(previous)
         data["previous"] = _pack(problem, parrays, comm)
         data["previous_lam"] = _gather_lam(comm, plam)
-    info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=n * dt, dt=dt, H=H, supplied=supplied,
+    info = dict(meta, format=FORMAT, rodfem_version=__version__, step=n, t=t, dt=dt, stepping=stepping, H=H,
+                supplied=supplied,
                 dissipated=dissipated, control_states=_control_states(problem),
                 has_previous=previous is not None, mpi_ranks=comm.size,
                 linear_solver=lu_name(problem.newton.settings))
@@ -326,7 +337,8 @@ def restore(problem, meta, arrays):
             c.law.state = [float(x) for x in saved[c.name]]
     problem.t = float(meta["t"])
     return SimpleNamespace(step=int(meta["step"]), H=float(meta["H"]), supplied=float(meta["supplied"]),
-                           dissipated=float(meta.get("dissipated", 0.0)), previous=previous, t=float(meta["t"]))
+                           dissipated=float(meta.get("dissipated", 0.0)), previous=previous, t=float(meta["t"]),
+                           stepping=meta.get("stepping") or None)
 
 
 def resume_parameters(meta, directory, overrides):
@@ -415,7 +427,7 @@ def _rewrite(path, text):
     os.replace(tmp, path)
 
 
-def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
+def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=None):
     """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint, their
     pictures read back from their centreline files (shapes.png and the animation show every frame,
     also for a run resumed from a checkpoint at t_end: killed before its summary and pictures)."""
@@ -423,7 +435,7 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0):
 
     class ResumedWriter(RunWriter):
         def __init__(self):
-            super().__init__(outdir, problem, n_steps, frames, section)
+            super().__init__(outdir, problem, n_steps, frames, section, times)
             self.count = step + 1
             if problem.comm.rank != 0:
                 return

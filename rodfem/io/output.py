@@ -14,7 +14,8 @@
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
 
-The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included); the
+The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included; adaptive steps:
+at the `frames` evenly spaced times, which the steps land on); the
 section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
 computed from the state gathered on rank 0 (rodfem/io/snapshot.py): the same on any number of ranks.
 
@@ -179,10 +180,12 @@ class RunWriter:
     """Writes a run into a claimed OutDir: history rows, frames (centreline, surface), and at the end
     summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
 
-    def __init__(self, out, problem, n_steps, frames=100, section=0.0):
+    def __init__(self, out, problem, n_steps, frames=100, section=0.0, times=None):
         plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
-        self.levels = frame_levels(n_steps, frames)
+        # adaptive steps (n_steps None): the frames at the `times` the steps land on
+        self.levels = frame_levels(n_steps, frames) if times is None else set()
+        self.times = None if times is None else set(times)
         self.views = [BodyView(name, body) for name, body in problem.body_items()]
         self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
@@ -192,7 +195,7 @@ class RunWriter:
     # -- per step (collective) ----------------------------------------------------
     def record(self, row, problem):
         self.out.do("write history.csv", self._append, row)
-        if self.count in self.levels:
+        if self.count in self.levels or (self.times is not None and row["t"] in self.times):
             self.frame(row["t"])
         self.count += 1
 
@@ -299,6 +302,9 @@ def summarize(scene_name, params, problem, result, status="completed", failure=N
         "wall_time_s": result.wall_time,
         "time_per_step_ms": 1e3 * result.wall_time / max(result.steps, 1),
         "newton_its_mean": float(its.mean()), "newton_its_max": int(its.max()),
+        "step_control": {k: result.stepping[k] for k in ("adaptive", "rejected", "split_steps", "substeps",
+                                                          "max_substep_balance", "dt_min", "solves", "iterations")
+                         if k in result.stepping},
         "max_balance_error": result.max_balance_error,
         "max_balance_error_relative": result.max_balance_error / Hmax,
         "H_initial": float(H[0]), "H_final": float(H[-1]), "max_abs_H": Hmax,
