@@ -140,8 +140,7 @@ FRICTION = Coulomb(0.3, 0.3, eps=1e-2)
 @pytest.mark.parametrize("obstacle, friction", [
     (Plane((0.0, 0.6, 0.8)), None), (Sphere((0.0, 0.0, -1.0), 1.0), None), (CYLINDER, None),
     (Plane((0.0, 0.6, 0.8)), FRICTION), (Sphere((0.0, 0.0, -1.0), 1.0), FRICTION),
-    pytest.param(CYLINDER, FRICTION, marks=pytest.mark.xfail(
-        strict=True, reason="known: Newton fails at t = 0.21 (string with friction draped over the cylinder)"))],
+    (CYLINDER, FRICTION)],   # Newton failed at the landing (t = 0.21) before the line search and sub-steps
     ids=["plane", "sphere", "cylinder", "plane-friction", "sphere-friction", "cylinder-friction"])
 def test_string_falling_on_an_obstacle_keeps_the_balance(obstacle, friction):
     """A string falls onto a tilted plane / a sphere / a cylinder, slides and (with friction) loses
