@@ -388,16 +388,21 @@ def test_bad_parameters_one_line_errors():
 # -- serial vs 2 ranks ------------------------------------------------------------------------------
 
 @pytest.mark.mpi
-def test_serial_and_two_ranks_agree(tmp_path):
-    """flying-spaghetti-3d (torsional variant, chord Newton) on 1 and 2 ranks: the whole histories agree.
+@pytest.mark.parametrize("material, t_end", [
+    ([], 3),
+    (["--set", "material=stiffening", "--set", "kappa_lock=0.5", "--set", "integrator=discrete-gradient"], 2),
+], ids=["linear", "stiffening-discrete-gradient"])
+def test_serial_and_two_ranks_agree(tmp_path, material, t_end):
+    """flying-spaghetti-3d (torsional variant, chord Newton) on 1 and 2 ranks, with the linear law and with
+    a non-quadratic one (forms/rod_materials.py, its strain fields): the whole histories agree.
 
     Every column at every time level, against its physical scale (energies: max|H|, positions: the
-    length, momenta: max|p|, max|L|).  Measured: <= 3e-15 of the scale, the same Newton iterations;
-    bound 1e-11 (the LU solvers differ: PETSc/SuperLU serial, MUMPS parallel)."""
-    args = ["run", "flying-spaghetti-3d", "--set", "variant=spatial", "--set", "n_elements=6", "--set", "t_end=3",
-            "--quiet"]
+    length, momenta: max|p|, max|L|).  Measured: <= 3e-15 (linear), <= 1e-14 (stiffening) of the scale,
+    the same Newton iterations; bound 1e-11 (the LU solvers differ: PETSc/SuperLU serial, MUMPS parallel)."""
+    args = ["run", "flying-spaghetti-3d", "--set", "variant=spatial", "--set", "n_elements=6", "--set", f"t_end={t_end}",
+            *material, "--quiet"]
     a, b, _ = serial_and_parallel(tmp_path, args)
-    assert list(a) == list(b) and len(a["t"]) == 31
+    assert list(a) == list(b) and len(a["t"]) == 10 * t_end + 1
     scale = {"H": np.max(np.abs(a["H"])), "tip": flying_spaghetti_3d.LENGTH,
              "p": max(np.max(np.abs(a[f"p_{c}"])) for c in "xyz"), "L": max(np.max(np.abs(a[f"L_{c}"])) for c in "xyz")}
     scale.update(supplied=scale["H"], balance=scale["H"], t=1.0)

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 import ufl
 from mpi4py import MPI
-from processes import serial_and_parallel
 
 from rodfem import Load, Problem, Support, run
 from rodfem.demos import flying_spaghetti_3d, roll_up_3d, whirling_rod_3d
@@ -274,19 +273,4 @@ def test_small_strain_compliances_and_numerical_legendre():
 
 # -- serial vs 2 ranks ------------------------------------------------------------------------------
 
-@pytest.mark.mpi
-def test_serial_and_two_ranks_agree_with_a_nonquadratic_law(tmp_path):
-    """flying-spaghetti-3d, material=stiffening, discrete gradient, on 1 and 2 ranks: every column of
-    the histories agrees (measured <= 1e-14 of its scale), the same Newton iterations."""
-    args = ["run", "flying-spaghetti-3d", "--set", "variant=spatial", "--set", "n_elements=6", "--set", "t_end=2",
-            "--set", "material=stiffening", "--set", "kappa_lock=0.5", "--set", "integrator=discrete-gradient",
-            "--quiet"]
-    a, b, _ = serial_and_parallel(tmp_path, args)
-    assert list(a) == list(b) and len(a["t"]) == 21
-    scale = {"H": np.max(np.abs(a["H"])), "tip": flying_spaghetti_3d.LENGTH,
-             "p": max(np.max(np.abs(a[f"p_{c}"])) for c in "xyz"), "L": max(np.max(np.abs(a[f"L_{c}"])) for c in "xyz")}
-    scale.update(supplied=scale["H"], balance=scale["H"], t=1.0)
-    assert np.array_equal(a["newton_its"], b["newton_its"])
-    for k in a:
-        if k != "newton_its":
-            assert np.max(np.abs(a[k] - b[k])) <= 1e-11 * scale[k.split("_")[0]], k
+# serial vs 2 ranks with a non-quadratic law: tests/models/test_cosserat_rod.py::test_serial_and_two_ranks_agree
