@@ -18,6 +18,7 @@
 # H_{n+1} - H_n = h y.u holds at every step; H - supplied is constant.
 #
 # Run it:  rodfem run crane-manoeuvre --out results/crane-manoeuvre
+
 import sys
 
 import numpy as np

@@ -35,6 +35,7 @@
 #
 # Run it:  rodfem run free-flying-3d --out results/free-flying-3d
 #          rodfem run free-flying-3d --set variant=rod-body --out results/free-flying-rod-body
+
 import sys
 
 import numpy as np

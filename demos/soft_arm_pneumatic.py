@@ -47,6 +47,7 @@
 #
 # Run it:  rodfem run soft-arm-pneumatic --out results/soft-arm-pneumatic
 #          rodfem run soft-arm-pneumatic --set mode=dynamic --set dt=0.005
+
 import sys
 
 import numpy as np

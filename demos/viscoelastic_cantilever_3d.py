@@ -32,6 +32,7 @@
 #
 # Run it:  rodfem run viscoelastic-cantilever-3d --out results/viscoelastic-cantilever-3d
 #          rodfem run viscoelastic-cantilever-3d --set E1=0 --out results/cantilever-3d-elastic
+
 import sys
 
 import numpy as np

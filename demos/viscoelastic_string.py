@@ -35,6 +35,7 @@
 # --set integrator=midpoint the balance is no longer exact (W is not quadratic).
 #
 # Run it:  rodfem run viscoelastic-string --out results/viscoelastic-string
+
 import sys
 
 import numpy as np
