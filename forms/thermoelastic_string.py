@@ -1,0 +1,202 @@
+"""Thermoelastic string: temperature as a port-Hamiltonian state, heat flux as a port.
+
+The hyperelastic string of forms/string.py (r, v, C = d_s r . d_s r) with one more
+state, the entropy density eta per reference length (P1, like r), and the thermal
+energy in the Hamiltonian.  The thermodynamics follows the GENERIC / port-Hamiltonian
+thermoelasticity in entropy variables of Romero, "Thermodynamically consistent
+time-stepping algorithms for non-linear thermomechanical systems", Int. J. Numer.
+Meth. Eng. 79 (2009) 706-732, doi 10.1002/nme.2588, and Betsch & Schiebl,
+"Energy-momentum-entropy consistent numerical methods for large-strain
+thermoelasticity relying on the GENERIC formalism", Int. J. Numer. Meth. Eng. 119
+(2019) 1216-1244, doi 10.1002/nme.6089 (entropy as the thermal state; the temperature
+an L2-projected co-energy).
+
+Free energy (Helmholtz, per reference length) with the thermal coupling linear in
+the temperature, m(C) = (C - 1)/2 the Green strain,
+
+    psi(C, theta) = W(C) - beta (theta - theta0) m(C) + c (theta - theta0 - theta ln(theta/theta0)),
+    beta = EA alpha  (EA the material's small-strain stiffness, alpha the expansion coefficient),
+
+so that eta = -d psi/d theta = beta m(C) + c ln(theta/theta0) is explicit in theta,
+and the internal energy e = psi + theta eta is explicit in (C, eta):
+
+    e(C, eta) = W(C) + beta theta0 m(C) + c theta0 [exp((eta - beta m(C))/c) - 1],
+    theta(C, eta) = de/d eta = theta0 exp((eta - beta m(C))/c),
+    S = 2 de/dC|_eta = 2 dpsi/dC|_theta = 2 W'(C) - beta (theta - theta0).
+
+Why entropy and not temperature: with eta as the state, H = int 1/2 rhoA v.v + e(C, eta) ds
+is the total energy with e known in closed form, and the discrete gradient of e in
+(C, eta) gives the exact energy balance directly; with theta as the state, e(C, theta)
+is not a potential of the thermal row and a conserving scheme needs extra terms
+(Romero 2009, sec. 4).  (The coupling is -beta (theta - theta0) m(C), the form of
+Romero 2009 and Betsch & Schiebl 2019: W(C) then stays the isothermal energy at theta0;
+the issue's W(eps - alpha (theta - theta0)) differs from it by 1/2 EA alpha^2
+(theta - theta0)^2, a change of the heat capacity of relative size EA alpha^2 theta/c.)
+
+Closed forms (any string material with W'(1) = 0): clamped at the reference length
+(C = 1) at temperature theta0 + dtheta the tension is N = S = -EA alpha dtheta; free,
+the stress-free state has 2 W'(C) = beta dtheta, for kirchhoff a Green strain
+(C - 1)/2 = alpha dtheta, length L sqrt(1 + 2 alpha dtheta) = L (1 + alpha dtheta + O(dtheta^2)).
+
+Balance laws (Fourier conduction q = -kappa d_s theta, kappa = conductivity x area):
+
+    d_t r = v,   rhoA d_t v = d_s (S d_s r),   d_t C = 2 d_s r . d_s v,
+    theta d_t eta = -d_s q  (+ heat ports),
+
+so d_t int e = int S/2 d_t C + theta d_t eta (mechanical power in, heat flux at the ends)
+and d_t int eta = int kappa (d_s theta / theta)^2 >= 0 for an insulated string.
+
+Weak form of one step (the string's rows, plus two): with z_C, z_eta =
+step.effort(e, [C, eta]) the pointwise discrete gradient (Gonzalez; the metric
+dC^2 + (d eta / c)^2, dimensionless), S = 2 z_C, and theta (P1, the step's
+temperature, stored in x_{n+1}) its L2 projection,
+
+    int (r_{n+1} - r_n)/h . dr - v_m . dr                                    = 0
+    int rhoA (v_{n+1} - v_n)/h . dv + S d_s r_m . d_s dv                     = ports
+    int [(C_{n+1} - C_n)/h - 2 d_s r_m . d_s v_m] dC                        = 0   (dC in DG0)
+    int (theta - z_eta) dtheta                                               = 0   (dtheta in P1)
+    int (eta_{n+1} - eta_n)/h deta + kappa d_s theta d_s(deta / theta)      = heat ports  (deta in P1)
+
+Energy.  Test the C-row with the cell mean of z_C (DG0; the C-row's bracket is cellwise
+constant, so this is int z_C [...]), the theta-row with deta_h = (eta_{n+1} - eta_n)/h
+(P1: int theta d_t eta = int z_eta d_t eta) and the eta-row with deta = theta:
+d_s(theta/theta) = 0, and
+
+    H_{n+1} - H_n = int rhoA (v_{n+1} - v_n).v_m + z_C dC + z_eta d eta = h y.u
+
+exactly (Gonzalez: z . dx = e(x_{n+1}) - e(x_n) pointwise, the same quadrature in H and
+the rows).  Entropy: test the eta-row with deta = 1:
+
+    int eta_{n+1} - int eta_n = h int kappa (d_s theta / theta)^2 ds  + h (heat ports' entropy) >= 0 isolated,
+
+exactly per step (`columns`: entropy, entropy_production).
+
+Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the end's
+temperature, power Q) and convection to an environment at theta_env (input theta_env,
+power h_c int (theta_env - theta) ds); their work is in `supplied`.
+"""
+import numpy as np
+import ufl
+
+from rodfem.core.materials import ParameterSet
+from rodfem.core.model import Field
+from rodfem.forms.string import String
+
+
+class ThermoelasticString(String):
+    """Thermoelastic PH string: `material` W(C) (a string material with a parameter EA, its
+    isothermal energy at theta0), rhoA, the expansion coefficient alpha (1/K), the heat capacity
+    c per reference length (J/(K m), > 0), kappa = conductivity x area (W m/K, >= 0), the
+    reference temperature theta0 (K, > 0); end_masses as for String."""
+    fields = String.fields + [Field("eta", "P", 1), Field("theta", "P", 1)]
+    quadrature_degree = 4   # e(C, eta) has exp(eta): a rule of degree 4 (the same in H and the rows)
+    labels = {**String.labels,
+              "eta": ("entropy density per reference length (the state's)", ()),
+              "theta": ("the step's temperature (L2 projection of de/d eta)", ()),
+              "temperature": ("temperature theta(C, eta) = de/d eta", ())}
+    static_fields = None   # no statics: the thermal rows have no total form here
+
+    def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=()):
+        if branches:
+            raise ValueError("ThermoelasticString: Maxwell branches are not supported (use String)")
+        super().__init__(material, rhoA, end_masses)
+        EA = material.params.get("EA")
+        if EA is None:
+            raise ValueError(f"material {material.name} has no parameter EA (the coupling is beta = EA alpha)")
+        for name, value, low in (("alpha", alpha, None), ("c", c, 0), ("kappa", kappa, -1), ("theta0", theta0, 0)):
+            ok = np.isfinite(value) and (low is None or value > low)
+            if not ok:
+                allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
+                raise ValueError(f"ThermoelasticString: {name} must be {allowed} (got {value!r})")
+        self.alpha, self.c, self.kappa, self.theta0 = float(alpha), float(c), float(kappa), float(theta0)
+        self.beta = self.alpha * float(EA)
+        self.thermal = ParameterSet(beta=self.beta, c=self.c, kappa=self.kappa, theta0=self.theta0)
+
+    def _t(self, domain):
+        return self.thermal.on(domain)
+
+    # -- energy and temperature ----------------------------------------------------
+    @staticmethod
+    def coupling(C):
+        """m(C) = (C - 1)/2, the Green strain."""
+        return 0.5 * (C - 1)
+
+    def internal_energy(self, C, eta, domain):
+        """e(C, eta) = W(C) + beta theta0 m + c theta0 [exp((eta - beta m)/c) - 1]."""
+        k = self._t(domain)
+        m = self.coupling(C)
+        return (self.W(C, domain) + k["beta"] * k["theta0"] * m
+                + k["c"] * k["theta0"] * (ufl.exp((eta - k["beta"] * m) / k["c"]) - 1))
+
+    def temperature(self, C, eta, domain):
+        """theta(C, eta) = theta0 exp((eta - beta m(C))/c)."""
+        k = self._t(domain)
+        return k["theta0"] * ufl.exp((eta - k["beta"] * self.coupling(C)) / k["c"])
+
+    def entropy_of(self, C, theta, domain):
+        """eta(C, theta) = beta m(C) + c ln(theta/theta0)."""
+        k = self._t(domain)
+        return k["beta"] * self.coupling(C) + k["c"] * ufl.ln(theta / k["theta0"])
+
+    def hamiltonian(self, x, dx, ds):
+        """H = int 1/2 rhoA v.v + e(C, eta) ds (+ end masses): the total energy."""
+        dom = dx.ufl_domain()
+        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"])
+             + self.internal_energy(x["C"], x["eta"], dom)) * dx
+        ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
+        return H + ends if ends is not None else H
+
+    # -- the step ------------------------------------------------------------------
+    def residual(self, step, test, dx, ds):
+        """The five rows of the module docstring."""
+        dom = dx.ufl_domain()
+        k = self._t(dom)
+        dr, dv, dC, deta, dth = test["r"], test["v"], test["C"], test["eta"], test["theta"]
+        rs, v = step.mid("r").dx(0), step.mid("v")
+        zC, zeta = step.effort(lambda C, eta: self.internal_energy(C, eta, dom), ["C", "eta"],
+                               weights=[1.0, 1.0 / (k["c"] * k["c"])])
+        theta = step.x1["theta"]
+        F = (ufl.inner(step.rate("r") - v, dr)
+             + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + 2 * zC * ufl.inner(rs, dv.dx(0))
+             + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
+             + (theta - zeta) * dth
+             + step.rate("eta") * deta + k["kappa"] * theta.dx(0) * (deta.dx(0) / theta
+                                                                   - deta * theta.dx(0) / theta ** 2)) * dx
+        ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
+        return F + ends if ends is not None else F
+
+    def dissipation(self, step, dx, ds):
+        """None: the total energy is conserved (conduction turns no energy into anything else)."""
+        return None
+
+    def compatible_strains(self, x):
+        """C = |d_s r|^2; theta = theta0 unless given; eta = eta(C, theta)."""
+        dom = ufl.domain.extract_unique_domain(x["r"])
+        C = ufl.inner(x["r"].dx(0), x["r"].dx(0))
+        return {"C": C, "theta": lambda s: np.full(s.shape[1], self.theta0),
+                "eta": self.entropy_of(C, x["theta"], dom)}
+
+    # -- what a run writes -----------------------------------------------------------
+    def columns(self, x, dx, ds, length):
+        """History columns of x_{n+1}: entropy int eta, mean_temperature (1/L) int theta(C, eta),
+        entropy_production int kappa (d_s theta / theta)^2 of the step (theta: the step's)."""
+        dom = dx.ufl_domain()
+        k = self._t(dom)
+        th = x["theta"]
+        return {"entropy": x["eta"] * dx,
+                "mean_temperature": self.temperature(x["C"], x["eta"], dom) / length * dx,
+                "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx}
+
+    def outputs(self, x):
+        """The string's outputs and the temperature theta(C, eta)."""
+        out = super().outputs(x)
+        dom = ufl.domain.extract_unique_domain(x["C"])
+        out["temperature"] = self.temperature(x["C"], x["eta"], dom)
+        out["tension"] = self.tension_at(x["C"], out["temperature"], dom)
+        return out
+
+    def tension_at(self, C, theta, domain):
+        """N = S sqrt(C), S = 2 W'(C) - beta (theta - theta0) (UFL)."""
+        k = self._t(domain)
+        Cv = ufl.variable(C)
+        return (2 * ufl.diff(self.W(Cv, domain), Cv) - k["beta"] * (theta - k["theta0"])) * ufl.sqrt(C)
