@@ -80,6 +80,7 @@ import ufl
 
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
+from rodfem.core.ports import ENDS
 from rodfem.forms.string import String
 
 
@@ -179,13 +180,19 @@ class ThermoelasticString(String):
     # -- what a run writes -----------------------------------------------------------
     def columns(self, x, dx, ds, length):
         """History columns of x_{n+1}: entropy int eta, mean_temperature (1/L) int theta(C, eta),
-        entropy_production int kappa (d_s theta / theta)^2 of the step (theta: the step's)."""
+        entropy_production int kappa (d_s theta / theta)^2 of the step (theta: the step's field),
+        temperature_left, temperature_right theta(C, eta) at the ends, arc_length int sqrt(C),
+        mean_tension (1/L) int N."""
         dom = dx.ufl_domain()
         k = self._t(dom)
         th = x["theta"]
+        theta = self.temperature(x["C"], x["eta"], dom)
         return {"entropy": x["eta"] * dx,
-                "mean_temperature": self.temperature(x["C"], x["eta"], dom) / length * dx,
-                "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx}
+                "mean_temperature": theta / length * dx,
+                "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx,
+                "temperature_left": theta * ds(ENDS["left"]), "temperature_right": theta * ds(ENDS["right"]),
+                "arc_length": ufl.sqrt(x["C"]) * dx,
+                "mean_tension": self.tension_at(x["C"], theta, dom) / length * dx}
 
     def outputs(self, x):
         """The string's outputs and the temperature theta(C, eta)."""
@@ -200,3 +207,22 @@ class ThermoelasticString(String):
         k = self._t(domain)
         Cv = ufl.variable(C)
         return (2 * ufl.diff(self.W(Cv, domain), Cv) - k["beta"] * (theta - k["theta0"])) * ufl.sqrt(C)
+
+
+def stress_free_strain(material, beta, dtheta):
+    """C > 0 with 2 W'(C) = beta dtheta (a number): the free string's strain at theta0 + dtheta
+    (bisection on the material's S(C) = 2 W'(C), increasing; kirchhoff: C = 1 + 2 alpha dtheta)."""
+    target = beta * dtheta
+    lo, hi = 1e-6, 1.0
+    while material.stress(hi) < target:
+        hi *= 2.0
+        if hi > 1e6:
+            raise ValueError(f"no stress-free strain: 2 W'(C) = {target:g} has no root with C < 1e6")
+    if material.stress(lo) > target:
+        raise ValueError(f"no stress-free strain: 2 W'(C) = {target:g} has no root with C > 1e-6")
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if material.stress(mid) < target else (lo, mid)
+        if hi - lo <= 4e-16 * hi:
+            break
+    return 0.5 * (lo + hi)
