@@ -53,6 +53,7 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
+THERMO = "tests/models/test_thermoelastic_string.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -609,6 +610,30 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- thermoelastic string (issue 30) --
+    M("conduction-without-the-product-rule", "forms/thermoelastic_string.py",
+      [("- deta * theta.dx(0) / theta ** 2)) * dx", "- 0.0 * deta * theta.dx(0) / theta ** 2)) * dx")],
+      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative"],
+      "the conduction term kappa theta' (deta/theta)' written as kappa theta' deta'/theta: the energy test "
+      "theta no longer cancels it (conduction creates or destroys energy)"),
+    M("thermal-coupling-sign", "forms/thermoelastic_string.py",
+      [('return (self.W(C, domain) + k["beta"] * k["theta0"] * m', 'return (self.W(C, domain) - k["beta"] * k["theta0"] * m')],
+      [THERMO + "::test_heated_bar_free_expansion_closed_form[kirchhoff]"],
+      "the internal energy's coupling term with the wrong sign: the stress-free length is not L (1 + alpha dtheta)"),
+    M("heat-flux-entropy-at-the-old-temperature", "forms/heat_ports.py",
+      [('return -self.constant * test["eta"] / step.x1["theta"] * ds(ENDS[self.where])',
+        'return -self.constant * test["eta"] / step.x0["theta"] * ds(ENDS[self.where])')],
+      [THERMO + "::test_heat_flux_port_energy_and_mean_temperature"],
+      "the flux port's entropy flow Q/theta with theta of t_n: the heat that enters is not the booked Q"),
+    M("convection-power-at-the-old-temperature", "forms/heat_ports.py",
+      [('        return self._flow(step.x1["theta"]) * dx', '        return self._flow(step.x0["theta"]) * dx')],
+      [THERMO + "::test_convection_exact_recurrence[discrete-gradient]"],
+      "the convection's booked power uses theta of t_n, not the step's temperature: the balance is off"),
+    M("thermal-dg-is-midpoint", "forms/thermoelastic_string.py",
+      [("zC, zeta = step.effort(", 'zC, zeta = type(step)(step.x0, step.x1, step.h, "midpoint").effort(')],
+      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative"],
+      "the thermal efforts at the midpoint (no Gonzalez correction): e(C, eta) is exponential in eta, "
+      "the energy is no longer exact"),
 ]
 
 

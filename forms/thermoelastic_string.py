@@ -5,11 +5,10 @@ state, the entropy density eta per reference length (P1, like r), and the therma
 energy in the Hamiltonian.  The thermodynamics follows the GENERIC / port-Hamiltonian
 thermoelasticity in entropy variables of Romero, "Thermodynamically consistent
 time-stepping algorithms for non-linear thermomechanical systems", Int. J. Numer.
-Meth. Eng. 79 (2009) 706-732, doi 10.1002/nme.2588, and Betsch & Schiebl,
-"Energy-momentum-entropy consistent numerical methods for large-strain
-thermoelasticity relying on the GENERIC formalism", Int. J. Numer. Meth. Eng. 119
-(2019) 1216-1244, doi 10.1002/nme.6089 (entropy as the thermal state; the temperature
-an L2-projected co-energy).
+Meth. Eng. 79 (2009) 706-732, doi 10.1002/nme.2588 (total energy conserved, entropy
+non-decreasing for the isolated system, by discrete gradients of the energy and entropy).
+Here the thermal state is the entropy density and the step's temperature an L2-projected
+co-energy (a mixed field), so that the energy test function lies in the thermal test space.
 
 Free energy (Helmholtz, per reference length) with the thermal coupling linear in
 the temperature, m(C) = (C - 1)/2 the Green strain,
@@ -27,10 +26,10 @@ and the internal energy e = psi + theta eta is explicit in (C, eta):
 Why entropy and not temperature: with eta as the state, H = int 1/2 rhoA v.v + e(C, eta) ds
 is the total energy with e known in closed form, and the discrete gradient of e in
 (C, eta) gives the exact energy balance directly; with theta as the state, e(C, theta)
-is not a potential of the thermal row and a conserving scheme needs extra terms
-(Romero 2009, sec. 4).  (The coupling is -beta (theta - theta0) m(C), the form of
-Romero 2009 and Betsch & Schiebl 2019: W(C) then stays the isothermal energy at theta0;
-the issue's W(eps - alpha (theta - theta0)) differs from it by 1/2 EA alpha^2
+is not a potential of the thermal row and a conserving scheme needs extra terms.
+(The coupling is -beta (theta - theta0) m(C), linear in theta, so that eta(C, theta) is
+explicit: W(C) then stays the isothermal energy at theta0;
+the expansion form W(eps - alpha (theta - theta0)) + ... differs from it by 1/2 EA alpha^2
 (theta - theta0)^2, a change of the heat capacity of relative size EA alpha^2 theta/c.)
 
 Closed forms (any string material with W'(1) = 0): clamped at the reference length
