@@ -70,6 +70,16 @@ the rows).  Entropy: test the eta-row with deta = 1:
 
 exactly per step (`columns`: entropy, entropy_production).
 
+Maxwell branches (forms/viscoelastic.py, `branches=[string.maxwell(tau, EA_k)]`): as in
+forms/string.py, the branch strains C_k (DG0) with energies W_k(C_k) in H, their stresses
+2 z_k in the v-row and their rows d_t C_k = 2 d_s r . d_s v - R_k z_k; the work the
+dashpots take out, sum_k R_k z_k^2 >= 0, is a heat source in the entropy row,
+
+    ... - sum_k R_k z_k^2 deta / theta,
+
+so the total energy stays exact (test with deta = theta: the dashpots' loss is the heat's gain;
+nothing is booked as `dissipated`) and the entropy grows by h int sum_k R_k z_k^2 / theta more.
+
 Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the end's
 temperature, power Q) and convection to an environment at theta_env (input theta_env,
 power h_c int (theta_env - theta) ds); their work is in `supplied`.
@@ -80,7 +90,7 @@ import ufl
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
-from rodfem.forms.string import String
+from rodfem.forms.string import String, relaxed
 
 
 class ThermoelasticString(String):
@@ -97,9 +107,10 @@ class ThermoelasticString(String):
     static_fields = None   # no statics: the thermal rows have no total form here
 
     def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=()):
-        if branches:
-            raise ValueError("ThermoelasticString: Maxwell branches are not supported (use String)")
-        super().__init__(material, rhoA, end_masses)
+        super().__init__(material, rhoA, end_masses, branches)
+        if self.branches:   # the branch strains C_k after the thermal fields
+            self.fields = ThermoelasticString.fields + [Field(f"C_{k}", "DG", 0)
+                                                        for k in range(1, len(self.branches) + 1)]
         EA = material.params.get("EA")
         if EA is None:
             raise ValueError(f"material {material.name} has no parameter EA (the coupling is beta = EA alpha)")
@@ -141,14 +152,16 @@ class ThermoelasticString(String):
     def hamiltonian(self, x, dx, ds):
         """H = int 1/2 rhoA v.v + e(C, eta) ds (+ end masses): the total energy."""
         dom = dx.ufl_domain()
-        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"])
-             + self.internal_energy(x["C"], x["eta"], dom)) * dx
+        e = self.internal_energy(x["C"], x["eta"], dom)
+        for k, b in enumerate(self.branches, 1):
+            e = e + b.spring(x[f"C_{k}"])
+        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + e) * dx
         ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
         return H + ends if ends is not None else H
 
     # -- the step ------------------------------------------------------------------
     def residual(self, step, test, dx, ds):
-        """The five rows of the module docstring."""
+        """The five rows of the module docstring (and the Maxwell branches' rows, their heat)."""
         dom = dx.ufl_domain()
         k = self._t(dom)
         dr, dv, dC, deta, dth = test["r"], test["v"], test["C"], test["eta"], test["theta"]
@@ -156,25 +169,35 @@ class ThermoelasticString(String):
         zC, zeta = step.effort(lambda C, eta: self.internal_energy(C, eta, dom), ["C", "eta"],
                                weights=[1.0, 1.0 / (k["c"] * k["c"])])
         theta = step.x1["theta"]
+        S = 2 * zC
+        branches = self._branch_efforts(step, dom)
+        heat = 0   # the Maxwell dashpots' dissipation sum_k R_k z_k^2, a heat source in the entropy row
+        for Wk, R in branches:
+            S, heat = S + 2 * Wk, heat + R * Wk ** 2
         F = (ufl.inner(step.rate("r") - v, dr)
-             + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + 2 * zC * ufl.inner(rs, dv.dx(0))
+             + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
              + (theta - zeta) * dth
              + step.rate("eta") * deta + k["kappa"] * theta.dx(0) * (deta.dx(0) / theta
-                                                                   - deta * theta.dx(0) / theta ** 2)) * dx
+                                                                   - deta * theta.dx(0) / theta ** 2)
+             - heat * deta / theta) * dx
+        for i, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):   # as in forms/string.py
+            row = step.rate(f"C_{i}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
+            F += b.row_scale(step, dom) * row * test[f"C_{i}"] * dx
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
 
     def dissipation(self, step, dx, ds):
-        """None: the total energy is conserved (conduction turns no energy into anything else)."""
+        """None: the total energy is conserved (conduction moves heat, the dashpots turn work into heat)."""
         return None
 
     def compatible_strains(self, x):
         """C = |d_s r|^2; theta = theta0 unless given; eta = eta(C, theta)."""
         dom = ufl.domain.extract_unique_domain(x["r"])
         C = ufl.inner(x["r"].dx(0), x["r"].dx(0))
+        branches = {f"C_{k}": relaxed for k in range(1, len(self.branches) + 1)}
         return {"C": C, "theta": lambda s: np.full(s.shape[1], self.theta0),
-                "eta": self.entropy_of(C, x["theta"], dom)}
+                "eta": self.entropy_of(C, x["theta"], dom), **branches}
 
     # -- what a run writes -----------------------------------------------------------
     def columns(self, x, dx, ds, length):
@@ -191,21 +214,25 @@ class ThermoelasticString(String):
                 "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx,
                 "temperature_left": theta * ds(ENDS["left"]), "temperature_right": theta * ds(ENDS["right"]),
                 "arc_length": ufl.sqrt(x["C"]) * dx,
-                "mean_tension": self.tension_at(x["C"], theta, dom) / length * dx}
+                "mean_tension": self.tension_at(x["C"], theta, dom, x) / length * dx}
 
     def outputs(self, x):
         """The string's outputs and the temperature theta(C, eta)."""
         out = super().outputs(x)
         dom = ufl.domain.extract_unique_domain(x["C"])
         out["temperature"] = self.temperature(x["C"], x["eta"], dom)
-        out["tension"] = self.tension_at(x["C"], out["temperature"], dom)
+        out["tension"] = self.tension_at(x["C"], out["temperature"], dom, x)
         return out
 
-    def tension_at(self, C, theta, domain):
-        """N = S sqrt(C), S = 2 W'(C) - beta (theta - theta0) (UFL)."""
+    def tension_at(self, C, theta, domain, x=None):
+        """N = S sqrt(C), S = 2 W'(C) - beta (theta - theta0) (+ the Maxwell branches' 2 W_k'(C_k), from x) (UFL)."""
         k = self._t(domain)
         Cv = ufl.variable(C)
-        return (2 * ufl.diff(self.W(Cv, domain), Cv) - k["beta"] * (theta - k["theta0"])) * ufl.sqrt(C)
+        S = 2 * ufl.diff(self.W(Cv, domain), Cv) - k["beta"] * (theta - k["theta0"])
+        for i, b in enumerate(self.branches if x is not None else (), 1):
+            Ck = ufl.variable(x[f"C_{i}"])
+            S = S + 2 * ufl.diff(b.spring(Ck), Ck)
+        return S * ufl.sqrt(C)
 
 
 def stress_free_strain(material, beta, dtheta):

@@ -160,6 +160,29 @@ def test_ports_and_coupled_energy_balance_exact():
     assert np.ptp(res.column("supplied")) > 0.1
 
 
+def test_maxwell_dashpot_work_becomes_heat():
+    """A Maxwell branch on the thermoelastic string with alpha = 0 (mechanics blind to temperature): the
+    motion is that of the viscoelastic String (forms/string.py) to round-off, the heat gained
+    c L (mean theta - theta0) equals that String's `dissipated` column at every time, nothing is booked as
+    dissipated, H (with the branch's energy) is exact, and the entropy grows."""
+    from rodfem.forms.string import String, maxwell
+    br = [maxwell(0.05, 50.0)]
+    init = {"r": lambda x: np.vstack([1.02 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])])}
+    sup = [Support("left", "pinned"), Support("right", "pinned")]
+    visco = run(Problem(String(logarithmic(EA=100.0), 1.0, branches=br), 1.0, 12, initial=init, supports=sup,
+                        integrator="discrete-gradient"), 0.01, 0.3)
+    model = ThermoelasticString(logarithmic(EA=100.0), 1.0, alpha=0.0, c=2.0, kappa=0.5, theta0=THETA0, branches=br)
+    thermo = run(Problem(model, 1.0, 12, initial=init, supports=sup, integrator="discrete-gradient"), 0.01, 0.3)
+    assert "dissipated" not in thermo.rows[0]
+    for col in ("mean_x", "mean_y", "mean_z"):
+        assert np.max(np.abs(thermo.column(col) - visco.column(col))) <= 1e-12
+    heat = 2.0 * (thermo.column("mean_temperature") - THETA0)
+    lost = visco.column("dissipated")
+    assert lost[-1] > 1e-3 and np.max(np.abs(heat - lost)) <= 1e-9 * lost[-1]
+    assert np.max(np.abs(thermo.column("balance_error"))) <= 1e-13 * 2.0 * THETA0
+    assert np.all(np.diff(thermo.column("entropy")) > 0)
+
+
 @pytest.mark.parametrize("omega_tau", [0.3, 1.0, 3.0])
 def test_thermoelastic_damping_ratio_against_zener(omega_tau):
     """Axial mode 1 of a pinned bar with conduction: the fitted damping ratio and frequency against the
