@@ -21,10 +21,11 @@ from rodfem.forms.thermoelastic_string import ThermoelasticString, stress_free_s
 THETA0 = 300.0
 
 
-def swinging(integrator="discrete-gradient", material=logarithmic, loads=(), alpha=2e-3, kappa=0.5, n=12):
-    """A pinned, pre-stretched string swinging with a hot spot: the mechanical and thermal parts coupled."""
+def swinging(integrator="discrete-gradient", material=logarithmic, loads=(), alpha=5e-4, kappa=0.5, n=12):
+    """A pinned string pre-stretched by 5 % (tension 4.9 N) swinging with a hot spot (+40 K, thermal stress
+    -EA alpha 40 = -2 N: the string stays in tension; in compression it would buckle at the grid scale)."""
     model = ThermoelasticString(material(EA=100.0), 1.0, alpha=alpha, c=2.0, kappa=kappa, theta0=THETA0)
-    initial = {"r": lambda x: np.vstack([1.02 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])]),
+    initial = {"r": lambda x: np.vstack([1.05 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])]),
                "theta": lambda x: THETA0 + 40 * np.exp(-((x[0] - 0.3) / 0.15) ** 2)}
     return Problem(model, 1.0, n, loads=list(loads), initial=initial, integrator=integrator,
                    supports=[Support("left", "pinned"), Support("right", "pinned")])
@@ -167,7 +168,7 @@ def test_maxwell_dashpot_work_becomes_heat():
     dissipated, H (with the branch's energy) is exact, and the entropy grows."""
     from rodfem.forms.string import String, maxwell
     br = [maxwell(0.05, 50.0)]
-    init = {"r": lambda x: np.vstack([1.02 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])])}
+    init = {"r": lambda x: np.vstack([1.05 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])])}
     sup = [Support("left", "pinned"), Support("right", "pinned")]
     visco = run(Problem(String(logarithmic(EA=100.0), 1.0, branches=br), 1.0, 12, initial=init, supports=sup,
                         integrator="discrete-gradient"), 0.01, 0.3)
@@ -178,7 +179,8 @@ def test_maxwell_dashpot_work_becomes_heat():
         assert np.max(np.abs(thermo.column(col) - visco.column(col))) <= 1e-12
     heat = 2.0 * (thermo.column("mean_temperature") - THETA0)
     lost = visco.column("dissipated")
-    assert lost[-1] > 1e-3 and np.max(np.abs(heat - lost)) <= 1e-9 * lost[-1]
+    # to the round-off of the heat content c theta0 L = 600 J (measured 1.8e-12 J = 3e-15 of it)
+    assert lost[-1] > 1e-3 and np.max(np.abs(heat - lost)) <= 2e-14 * 2.0 * THETA0
     assert np.max(np.abs(thermo.column("balance_error"))) <= 1e-13 * 2.0 * THETA0
     assert np.all(np.diff(thermo.column("entropy")) > 0)
 
