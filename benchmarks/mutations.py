@@ -53,6 +53,8 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
+SIMULATOR = "tests/app/test_simulator.py"
+REDUCE = "tests/analysis/test_reduce.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -609,6 +611,30 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- the step interface and the reduced models (issue 29) --------------------------------------
+    M("simulator-restore-keeps-the-history", "rodfem/app/simulator.py",
+      [("        del self.history.rows[state.rows:]\n", "")],
+      [SIMULATOR + "::test_save_restore_and_reset_replay_exactly"],
+      "restore() rolls the state back but the history keeps the rows of the undone steps"),
+    M("simulator-restore-forgets-the-predictor", "rodfem/app/simulator.py",
+      [("        self._previous = None if state.previous is None else state.previous.copy()\n",
+        "        self._previous = None\n")],
+      [SIMULATOR + "::test_save_restore_and_reset_replay_exactly"],
+      "a restored simulator starts Newton from another guess: a replay is not the same run"),
+    M("reduce-galerkin-instead-of-effort-constraint", "rodfem/analysis/reduce.py",
+      [("    W = np.asarray(full.Q @ V)\n", "    W = V\n")],
+      [REDUCE + "::test_reduced_model_is_port_hamiltonian_and_passive",
+       REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
+      "a Galerkin projection W = V: Q_r = I is no longer the reduced model's energy, C_r != B_r^T"),
+    M("reduce-dissipation-sign", "rodfem/analysis/reduce.py",
+      [("    Jr, Rr, Esym = 0.5 * (M - M.T), 0.5 * (N + N.T), 0.5 * (Er + Er.T)\n",
+        "    Jr, Rr, Esym = 0.5 * (M - M.T), -0.5 * (N + N.T), 0.5 * (Er + Er.T)\n")],
+      [REDUCE + "::test_reduced_model_is_port_hamiltonian_and_passive"],
+      "the reduced dissipation with the wrong sign (an active reduced model)"),
+    M("reduce-one-direction-per-frequency", "rodfem/analysis/reduce.py",
+      [("        b = Vh[k % Vh.shape[0]].conj()\n", "        b = Vh[0].conj()\n")],
+      [REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
+      "a repeated frequency gets the same direction twice (the hanging cable's second pendulum plane is lost)"),
 ]
 
 
