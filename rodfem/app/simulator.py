@@ -28,8 +28,9 @@ rebuilds the scene with other parameter values (a System given directly cannot b
 
 Under mpirun every rank calls `step` with the same sequence of steps; the inputs of rank 0 are used
 (broadcast: the other ranks may pass None) and the outputs are returned on every rank (collective
-assembly).  A Newton failure raises NewtonFailure with the state left at x_n (the caller may retry
-with a smaller h); there is no step splitting here.
+assembly).  A step whose Newton fails is split into 2, 4, ... equal sub-steps from x_n as in the
+time loop (rodfem/analysis/stepping.py, down to `dt_min`, default h/1024; the outputs then are the sub-steps' mean, so
+that h u.y is still the step's work); below that NewtonFailure is raised with the state left at x_n.
 """
 from dataclasses import dataclass, field
 
@@ -37,9 +38,9 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from rodfem.analysis.stepping import StepState
+from rodfem.analysis.stepping import SPLIT_MAX, StepState
 from rodfem.analysis.timeloop import Result, attempt
-from rodfem.errors import ParameterError
+from rodfem.errors import NewtonFailure, ParameterError
 from rodfem.fem.jit import compile_forms
 
 
@@ -78,7 +79,9 @@ class Port:
         self.name, self.body, self.load = name, body, load
         self.shape = tuple(load.constant.value.shape)
         self.size = int(np.prod(self.shape)) if self.shape else 1
-        self.original = load.value
+        # the time function the port reads: an actuator's (forms/actuators.py) `history`, a Load's `value`
+        self.attribute = "history" if hasattr(load, "history") else "value"
+        self.original = getattr(load, self.attribute)
         self.held = None
 
     def output_forms(self):
@@ -92,25 +95,35 @@ class Port:
         self.load.constant = saved
         return forms
 
-    def hold(self, value):
+    def hold(self, value, t=None):
+        """Hold u = value from now on; with `t`, checked by the port itself at t (e.g. a tendon's tension
+        >= 0: ParameterError, and the port keeps what it held)."""
         value = np.asarray(value, dtype=float)
         if value.size != self.size:
             raise ParameterError(f"input '{self.name}' must have {self.size} number(s) (got {value.size})")
         if not np.all(np.isfinite(value)):
             raise ParameterError(f"input '{self.name}' must be finite (got {value.ravel().tolist()})")
+        before = self.held
         self.held = value.reshape(self.shape).copy()
-        self.load.value = lambda t, v=self.held: v
+        setattr(self.load, self.attribute, lambda t, v=self.held: v)
+        if t is not None:
+            try:
+                self.load.update(t)
+            except ParameterError:
+                self.release() if before is None else self.hold(before)
+                raise
 
     def release(self):
         self.held = None
-        self.load.value = self.original
+        setattr(self.load, self.attribute, self.original)
 
 
 class Simulator:
     """A scene (or its name, with parameter values `params`) or a System, stepped from Python (see
-    the module docstring).  `dt`: the default step of `step` (a scene's dt by default)."""
+    the module docstring).  `dt`: the default step of `step` (a scene's dt by default); `dt_min`: the
+    smallest sub-step a failing step is split into (default h/1024; dt_min = h: no splitting)."""
 
-    def __init__(self, scene_or_system, dt=None, comm=MPI.COMM_WORLD, **params):
+    def __init__(self, scene_or_system, dt=None, comm=MPI.COMM_WORLD, dt_min=None, **params):
         from rodfem.app.scene import Scene, load
         self.comm = comm
         if isinstance(scene_or_system, (str, Scene)):
@@ -121,7 +134,7 @@ class Simulator:
                 raise ParameterError(f"parameters ({', '.join(params)}) need a scene, not a System")
             self.scene, self.params = None, {}
         self._system = None if self.scene is not None else scene_or_system
-        self.dt = dt
+        self.dt, self.dt_min = dt, dt_min
         self._make()
 
     # -- building ---------------------------------------------------------------------------
@@ -205,29 +218,64 @@ class Simulator:
         if h is None or not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
             raise ParameterError(f"the step dt must be a number > 0 (got {h!r})")
         h = float(h)
-        for name, value in self._inputs(u).items():
-            self.ports[name].hold(value)
         problem, state = self.problem, self._state
         t = problem.t
+        for name, value in self._inputs(u).items():
+            self.ports[name].hold(value, t + 0.5 * h)
         t1 = t + h
         n = self.history.steps + 1
-        ratio = h / (state.h_prev or h)
         H = self._sums[0]
-        its, H_new, work, lost = attempt(problem, state, h, t, t1, self._previous, ratio, n, self.dissipates)
-        y = {name: np.array([self.comm.allreduce(fem.assemble_scalar(self._outputs[(name, j)]), op=MPI.SUM)
-                             for j in range(p.size)]) for name, p in self.ports.items()}
+        k, failed = state.split, False
+        while True:
+            try:
+                its, H_new, work, lost, y, worst = self._substeps(h, k, t, t1, n, H)
+                break
+            except NewtonFailure:
+                state.rejected += 1
+                if h / (2 * k) < (self.dt_min or h / SPLIT_MAX) * (1 - 1e-12):
+                    raise
+                k, failed = 2 * k, True
+        state.split = k if failed else max(1, k // 2)
+        state.split_steps += k > 1
+        state.max_substep_balance = max(state.max_substep_balance, worst)
         supplied, dissipated = self._sums[1] + work, self._sums[2] + lost
         row = {"t": t1, "H": H_new, "supplied": supplied, **({"dissipated": dissipated} if self.dissipates else {}),
                "newton_its": its, "balance_error": H_new - H + lost - work, **self._port_columns(y),
                **problem.observe()}
         self._previous = problem.accept()
         problem.t = t1
-        state.h_prev = h
-        state.substeps += 1
+        state.h_prev = h / k
+        state.substeps += k
         self._sums = (H_new, supplied, dissipated)
         self.history.rows.append(row)
         self.history.steps = n
         return StepOutput(t1, y, row, its)
+
+    def _substeps(self, h, k, t, t1, n, H):
+        """[t, t1] in k equal sub-steps from x_n (the time loop's split, rodfem/analysis/timeloop.py), the last
+        one not accepted: (iterations, H, work, dissipated, y, largest sub-step balance), y the mean of the
+        sub-steps' outputs (u is held: h u.y is the work of the step); on a failure x_n is put back."""
+        problem, state = self.problem, self._state
+        snap = problem.snapshot() if k > 1 else None
+        previous, ratio = self._previous, (h / k) / (state.h_prev or h / k)
+        its, work, lost, worst = 0, 0.0, 0.0, 0.0
+        y = {name: np.zeros(p.size) for name, p in self.ports.items()}
+        for i in range(k):
+            a, b = t + i * h / k, (t1 if i == k - 1 else t + (i + 1) * h / k)
+            try:
+                s_its, H_new, w, d = attempt(problem, state, b - a, a, b, previous, ratio, n, self.dissipates)
+            except NewtonFailure:
+                if snap is not None:
+                    problem.restore(snap)
+                raise
+            for name, p in self.ports.items():
+                y[name] += np.array([self.comm.allreduce(fem.assemble_scalar(self._outputs[(name, j)]), op=MPI.SUM)
+                                     for j in range(p.size)]) / k
+            its, work, lost = its + s_its, work + w, lost + d
+            worst, H = max(worst, abs(H_new - H + d - w)), H_new
+            if i < k - 1:
+                previous, ratio = problem.accept(), 1.0
+        return its, H, work, lost, y, worst
 
     # -- save, restore, reset ---------------------------------------------------------------
     def save(self) -> SavedState:
@@ -235,7 +283,7 @@ class Simulator:
         return SavedState(self.problem.snapshot(), self.problem.t, self._sums,
                           None if self._previous is None else self._previous.copy(), self._state.h_prev,
                           {k: (None if p.held is None else p.held.copy()) for k, p in self.ports.items()},
-                          len(self.history.rows), self.history.steps)
+                          len(self.history.rows), self.history.steps, {"split": self._state.split})
 
     def restore(self, state: SavedState):
         """Back to a state of `save()` (of this simulator): x_n, t, the inputs held then; the history
@@ -245,6 +293,7 @@ class Simulator:
         self._sums = state.sums
         self._previous = None if state.previous is None else state.previous.copy()
         self._state.h_prev = state.h_prev
+        self._state.split = state.extra.get("split", 1)
         for name, p in self.ports.items():
             if state.held.get(name) is None:
                 p.release()

@@ -137,8 +137,9 @@ def test_bad_inputs_are_one_line_errors():
 
 
 def test_a_failed_step_leaves_the_state_at_x_n():
-    """A step Newton cannot take (a huge moment) raises NewtonFailure; the next step starts from x_n."""
-    sim = arm()
+    """A step Newton cannot take (a huge moment; no sub-steps allowed) raises NewtonFailure; the next step
+    starts from x_n."""
+    sim = arm(dt_min=H)
     sim.step({PORT: 1.0}, H)
     row = sim.history.rows[-1]
     with pytest.raises(NewtonFailure):
