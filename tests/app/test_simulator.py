@@ -149,6 +149,23 @@ def test_a_failed_step_leaves_the_state_at_x_n():
     assert sim.history.max_balance_error <= 1e-12
 
 
+def test_a_step_newton_cannot_take_is_split_as_in_the_time_loop():
+    """u = 50 over h = 0.1 from rest: Newton fails on the whole step (dt_min = h: refused); by default the step
+    is split in two, and is then the same as two steps of h/2 with the same u (to round-off); the output is
+    the sub-steps' mean, so h u y is still the step's supplied work."""
+    with pytest.raises(NewtonFailure):
+        arm(dt_min=0.1).step({PORT: 50.0}, 0.1)
+    sim, halves = arm(), arm()
+    out = sim.step({PORT: 50.0}, 0.1)
+    assert sim._state.split_steps == 1 and sim._state.substeps == 2
+    ys = [halves.step({PORT: 50.0}, 0.05).y[PORT][0] for _ in range(2)]
+    for c in ("H", "supplied", "tip_x", "tip_y", "hub_angle"):
+        assert out.row[c] == pytest.approx(halves.history.rows[-1][c], rel=1e-12, abs=1e-12), c
+    assert out.y[PORT][0] == pytest.approx(np.mean(ys), rel=1e-12)
+    assert 0.1 * 50.0 * out.y[PORT][0] == pytest.approx(out.row["supplied"], rel=1e-12)
+    assert abs(out.row["balance_error"]) <= 1e-12 * out.row["H"]
+
+
 SCRIPT = """
 import json
 import numpy as np
