@@ -118,15 +118,25 @@ inextensible, shear-rigid rod (its strain rate is zero, N_k stays 0): give
 it C_M only.
 
 Kelvin-Voigt and Rayleigh damping (forms/damping.py): `damping` = kelvin_voigt(tau_d, C_N, C_M)
-(viscosities D_N = tau_d C_N^-1, D_M = tau_d C_M^-1 componentwise, none where a compliance is 0)
-or rayleigh(alpha, beta, C_N, C_M) adds to the resultants of the momentum rows (not of the
-compliance rows) the viscous stresses of the midpoint strain rates,
+(viscosities D_N = tau_d C_N^-1, D_M = tau_d C_M^-1 componentwise, none where a compliance is 0),
+rayleigh(alpha, beta, C_N, C_M) or damping.KelvinVoigt([6 viscosities], alpha) adds to the resultants
+of the momentum rows (not of the compliance rows) the viscous stresses of the step's strain rates
+as the compliance rows give them, the midpoint rates projected on DG1 (Pi) like the stresses:
 
-    N_v = D_N (R^T d_s v + J_N^T v_d)_m,      M_v = D_M (J_K v_d)_m,
+    N_v = D_N e_N,  M_v = D_M e_M,   (e_N, e_M) = Pi (R^T d_s v + J_N^T v_d, J_K v_d)_m
+                                    = (C_N d_t N, C_M d_t M)   (linear; dW*/d(N, M) at (d_t N, d_t M)
+                                      for a quadratic W*; (d_t gamma, d_t kappa) for any other),
 
-and the forces alpha (rhoA v, m_i w_i)_m (Rayleigh's mass part).  Testing with (v_m, w_m):
-H_{n+1} - H_n = -h d_n + h y.u, h d_n = h int N_v.D_N^-1 N_v + M_v.D_M^-1 M_v + alpha (rhoA |v|^2
-+ sum m_i |w_i|^2)_m ds.  Zero damping builds nothing.
+and the forces alpha (rhoA v, m_i w_i)_m (Rayleigh's mass part): R = B^* Pi^* D Pi B >= 0 on the
+velocity efforts.  Testing the momentum rows with (v_m, w_m) and the compliance rows with (N_v, M_v)
+(DG1 fields) gives, for both rules,
+
+    H_{n+1} - H_n = -h d_n + h y.u,
+    h d_n = h int e_N.D_N e_N + e_M.D_M e_M + alpha (rhoA |v|^2 + sum m_i |w_i|^2)_m ds >= 0.
+
+A constrained strain (zero compliance) has e = 0: no dashpot.  Soromox (github.com/tud-phi/soromox)
+writes D = eta diag(J, 3I, 3I, 3A, A, A) (torsion, bending, axial, shear) for an incompressible
+material (E = 3G): our D with tau_d = eta/G.  Zero damping builds nothing.
 
 Ports: a spatial moment m acts on the directors through
 <m, 1/2 sum_i d_i x w_i> (= m . omega, see `spatial_moment`); a body-fixed
@@ -138,8 +148,9 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
-from rodfem.forms.rod_materials import COMPLIANCES, RodMaterial
+from rodfem.errors import ParameterError
 from rodfem.forms import damping as kv
+from rodfem.forms.rod_materials import COMPLIANCES, RodMaterial
 from rodfem.forms.viscoelastic import Maxwell, active, row_scale
 
 DIRECTORS = ("d1", "d2", "d3")
@@ -247,7 +258,7 @@ def _stiffnesses(C_N, C_M):
     """1/C per component (inf for a zero compliance: a constrained strain gets no dashpot)."""
     C = np.concatenate([np.asarray(C_N, dtype=float), np.asarray(C_M, dtype=float)])
     if C.shape != (6,) or np.any(C < 0) or not np.all(np.isfinite(C)):
-        raise ValueError(f"damping: C_N, C_M must be three compliances >= 0 each (got {C_N!r}, {C_M!r})")
+        raise ParameterError(f"damping: C_N, C_M must be three compliances >= 0 each (got {C_N!r}, {C_M!r})")
     return np.where(C > 0, 1.0 / np.where(C > 0, C, 1.0), np.inf)
 
 
@@ -408,7 +419,7 @@ class CosseratRod:
         dw = [test[n] for n in RATES]
         mass_damping = None
         if self.damping is not None:   # Kelvin-Voigt: viscous resultants in the momentum rows only
-            Nv, Mv, alpha = self._viscous(step, dx.ufl_domain())
+            Nv, Mv, _, alpha = self._viscous(step, dx.ufl_domain())
             N, M = N + Nv, M + Mv
             if alpha is not None:
                 mass_damping = alpha * (rhoA * ufl.inner(v, dv)
@@ -447,20 +458,18 @@ class CosseratRod:
             F += mass_damping
         return F
 
-    @staticmethod
-    def _strain_rates(step):
-        """(Gamma_dot, K_dot) = (R^T v' + J_N^T v_d, J_K v_d) at the step's midpoint."""
-        r, v = step.mid("r"), step.mid("v")
-        d = [step.mid(n) for n in DIRECTORS]
-        w = [step.mid(n) for n in RATES]
-        gamma_rate = frame(d).T * v.dx(0) + ufl.as_vector([ufl.inner(r.dx(0), w[i]) for i in range(3)])
-        return gamma_rate, curvature_rate(d, w)
+    def _strain_rates(self, step, domain):
+        """(e_N, e_M) = Pi (R^T v' + J_N^T v_d, J_K v_d)_m, the strain rates of the compliance rows."""
+        if self.general:
+            return step.rate("gamma"), step.rate("kappa")
+        return self._compliance_rows(step.rate("N"), step.rate("M"), domain)
 
     def _viscous(self, step, domain):
-        """(N_v, M_v, alpha): the Kelvin-Voigt resultants D (Gamma_dot, K_dot)_m, the mass rate (None if 0)."""
-        gdot, kdot = self._strain_rates(step)
-        s = kv.viscous(self.damping.eta(domain), [gdot[i] for i in range(3)] + [kdot[i] for i in range(3)])
-        return ufl.as_vector(s[:3]), ufl.as_vector(s[3:]), self.damping.mass_rate(domain)
+        """(N_v, M_v, (e_N, e_M), alpha): the Kelvin-Voigt resultants D (e_N, e_M), the strain rates,
+        the mass rate (None if 0)."""
+        eN, eM = self._strain_rates(step, domain)
+        s = kv.viscous(self.damping.eta(domain), [eN[i] for i in range(3)] + [eM[i] for i in range(3)])
+        return ufl.as_vector(s[:3]), ufl.as_vector(s[3:]), (eN, eM), self.damping.mass_rate(domain)
 
     def dissipation(self, step, dx, ds):
         """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k + N_v.Gamma_dot + M_v.K_dot
@@ -470,9 +479,8 @@ class CosseratRod:
         terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
                  for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
         if self.damping is not None:
-            Nv, Mv, alpha = self._viscous(step, dx.ufl_domain())
-            gdot, kdot = self._strain_rates(step)
-            terms.append(ufl.inner(Nv, gdot) + ufl.inner(Mv, kdot))
+            Nv, Mv, (eN, eM), alpha = self._viscous(step, dx.ufl_domain())
+            terms.append(ufl.inner(Nv, eN) + ufl.inner(Mv, eM))
             if alpha is not None:
                 rhoA, masses, _, _ = self._constants(dx.ufl_domain())
                 v, w = step.mid("v"), [step.mid(n) for n in RATES]

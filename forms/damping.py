@@ -48,6 +48,7 @@ import math
 import numpy as np
 
 from rodfem.core.materials import ParameterSet
+from rodfem.errors import ParameterError
 
 
 class KelvinVoigt:
@@ -57,10 +58,10 @@ class KelvinVoigt:
     def __init__(self, viscosities, alpha=0.0):
         eta = np.atleast_1d(np.asarray(viscosities, dtype=float))
         if not np.all(np.isfinite(eta)) or np.any(eta < 0):
-            raise ValueError(f"damping: viscosities must be finite numbers >= 0 (got {tuple(eta)})")
+            raise ParameterError(f"damping: the viscosities eta must be finite numbers >= 0 (got {tuple(eta)})")
         alpha = float(alpha)
         if not (math.isfinite(alpha) and alpha >= 0):
-            raise ValueError(f"damping: the mass-proportional rate alpha must be a finite number >= 0 (got {alpha!r})")
+            raise ParameterError(f"damping: the mass-proportional rate alpha must be a finite number >= 0 (got {alpha!r})")
         self.viscosities, self.alpha = eta, alpha
         self.constants = ParameterSet(alpha=alpha, **{f"eta{i}": e for i, e in enumerate(eta)})
 
@@ -94,7 +95,7 @@ def checked(damping, components):
     if not isinstance(damping, KelvinVoigt):
         raise TypeError(f"damping must be a KelvinVoigt (the model's kelvin_voigt(...) or rayleigh(...)), got {damping!r}")
     if len(damping.viscosities) != components:
-        raise ValueError(f"damping: need {components} viscosities for this model (got {len(damping.viscosities)})")
+        raise ParameterError(f"damping: this model needs {components} viscosities (got {len(damping.viscosities)})")
     return damping if damping.active else None
 
 
@@ -103,7 +104,8 @@ def retardation(tau, stiffnesses, alpha=0.0):
     small-strain stiffnesses; an infinite k_i -- a constrained strain -- gets no dashpot)."""
     tau = float(tau)
     if not (math.isfinite(tau) and tau >= 0):
-        raise ValueError(f"damping: the retardation time tau must be a finite number >= 0 (got {tau!r})")
+        raise ParameterError("damping: the retardation time tau (= eta/E, or Rayleigh's beta) must be a finite "
+                             f"number >= 0 (got {tau!r})")
     k = np.asarray(stiffnesses, dtype=float)
     return KelvinVoigt(np.where(np.isinf(k), 0.0, tau * np.where(np.isinf(k), 0.0, k)), alpha=alpha)
 

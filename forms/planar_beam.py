@@ -48,14 +48,23 @@ H_{n+1} - H_n = -h d_n + h y.u with h d_n = h int sum_j (N_j, M_j).R_j (N_j, M_j
 (`dissipation`).  Without branches nothing of this is built.
 
 Kelvin-Voigt and Rayleigh damping (forms/damping.py): `damping` = kelvin_voigt(tau_d, EA, GA, EI)
-or rayleigh(alpha, beta, EA, GA, EI) adds to the resultants of the momentum rows (not of the strain
-rows) the viscous stresses D e of the midpoint strain rates
+or rayleigh(alpha, beta, EA, GA, EI) (or damping.KelvinVoigt([eta_EA, eta_GA, eta_EI], alpha)) adds
+to the resultants of the momentum rows (not of the strain rows) the viscous stresses D e of the
+step's strain rates, the rates of the strain fields,
 
-    e = (A^T (d_s v - omega S d_s r), d_s omega)_m,      D = diag(eta_EA, eta_GA, eta_EI) = tau_d diag(EA, GA, EI),
+    e = ((Gamma_{n+1} - Gamma_n)/h, (kappa_{n+1} - kappa_n)/h) = Pi (A^T (d_s v - omega S d_s r), d_s omega)_m,
+    D = diag(eta_EA, eta_GA, eta_EI) = tau_d diag(EA, GA, EI),
 
-and the forces alpha (rhoA v_m, rhoI omega_m) (Rayleigh's mass part).  Testing with (v_m, omega_m):
-H_{n+1} - H_n = -h d_n + h y.u with h d_n = h int e.D e + alpha (rhoA |v_m|^2 + rhoI omega_m^2) ds
-(`dissipation`), for both rules.  Zero damping builds nothing.
+i.e. the midpoint strain rates projected on DG_{k-1} by the strain rows (Pi), like the elastic
+stresses (the pointwise rate would lock: with P1 its shear part damps bending GA h^2/(12 EI) times
+too much), and the forces alpha (rhoA v_m, rhoI omega_m) (Rayleigh's mass part).  As a PH structure
+it is R = B^* Pi^* D Pi B >= 0 on the velocity efforts (B: the strain-rate operator).  Testing the
+momentum rows with (v_m, omega_m) and the strain rows with D e (a DG_{k-1} field: exact with any
+quadrature) gives, for both rules,
+
+    H_{n+1} - H_n = -h d_n + h y.u,   h d_n = h int e.D e + alpha (rhoA |v_m|^2 + rhoI omega_m^2) ds >= 0
+
+(`dissipation`).  Zero damping builds nothing.
 """
 import math
 import numbers
@@ -244,7 +253,7 @@ class PlanarBeam:
         c = self.densities.on(dx.ufl_domain())
         mass_damping = None
         if self.damping is not None:   # Kelvin-Voigt: viscous resultants in the momentum rows only
-            Nv, Mv, alpha = self._viscous(step, dx.ufl_domain())
+            Nv, Mv, _, alpha = self._viscous(step, dx.ufl_domain())
             N, M = N + Nv, M + Mv
             if alpha is not None:
                 mass_damping = alpha * (c["rhoA"] * ufl.inner(v, dv) + c["rhoI"] * w * dw) * dx
@@ -266,13 +275,12 @@ class PlanarBeam:
         return F
 
     def _viscous(self, step, domain):
-        """(N_v, M_v, alpha): the Kelvin-Voigt resultants D e of the midpoint strain rates
-        e = (A^T (v' - omega S r'), omega')_m and the mass-proportional rate (None if zero)."""
-        A, r_s, v, w = rotation(step.mid("phi")), step.mid("r").dx(0), step.mid("v"), step.mid("omega")
-        Gdot = A.T * (v.dx(0) - w * S_HAT * r_s)
-        eta = self.damping.eta(domain)
-        sN0, sN1, sM = kv.viscous(eta, (Gdot[0], Gdot[1], w.dx(0)))
-        return ufl.as_vector([sN0, sN1]), sM, self.damping.mass_rate(domain)
+        """(N_v, M_v, e, alpha): the Kelvin-Voigt resultants D e of the strain fields' rates
+        e = (d_t Gamma, d_t kappa) (= Pi (A^T (v' - omega S r'), omega')_m by the strain rows), e, and
+        the mass-proportional rate (None if zero)."""
+        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")
+        sN0, sN1, sM = kv.viscous(self.damping.eta(domain), (Gdot[0], Gdot[1], kdot))
+        return ufl.as_vector([sN0, sN1]), sM, (Gdot, kdot), self.damping.mass_rate(domain)
 
     def dissipation(self, step, dx, ds):
         """h d_n = h int sum_j N_j.R_j N_j + R_j M_j^2 + e.D e + alpha (rhoA v.v + rhoI omega^2) ds
@@ -283,11 +291,10 @@ class PlanarBeam:
         d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
                 for Nj, Mj, R in self._branch_efforts(step, domain))
         if self.damping is not None:
-            Nv, Mv, alpha = self._viscous(step, domain)
-            A, r_s, v, w = rotation(step.mid("phi")), step.mid("r").dx(0), step.mid("v"), step.mid("omega")
-            d = d + ufl.inner(Nv, A.T * (v.dx(0) - w * S_HAT * r_s)) + Mv * w.dx(0)
+            Nv, Mv, (Gdot, kdot), alpha = self._viscous(step, domain)
+            d = d + ufl.inner(Nv, Gdot) + Mv * kdot
             if alpha is not None:
-                c = self.densities.on(domain)
+                c, v, w = self.densities.on(domain), step.mid("v"), step.mid("omega")
                 d = d + alpha * (c["rhoA"] * ufl.inner(v, v) + c["rhoI"] * w ** 2)
         return step.h * d * dx
 

@@ -91,8 +91,8 @@ from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
-from rodfem.forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
 from rodfem.forms import damping as kv
+from rodfem.forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
 from rodfem.forms.viscoelastic import Maxwell, active
 
 
