@@ -116,11 +116,20 @@ def zeta_rayleigh(omega, alpha, beta):
     return alpha / (2 * omega) + beta * omega / 2
 
 
-def log_decrement_zeta(t, y):
-    """zeta from the logarithmic decrement of the successive maxima of a free decay y(t) (numbers):
-    delta = ln(y_k / y_{k+1}) averaged over the peaks found, zeta = delta / sqrt(4 pi^2 + delta^2).
-    The peaks are refined by a parabola through the three samples around each."""
+def log_decrement_zeta(t, y, average_over=None):
+    """zeta from the logarithmic decrement of the successive maxima of a free decay y(t) (numbers, equal
+    steps): delta = ln(y_k / y_{k+1}) averaged over the peaks found, zeta = delta / sqrt(4 pi^2 + delta^2)
+    (a damped mode exp(-zeta omega t) cos(omega_d t) has y_k / y_{k+1} = exp(2 pi zeta / sqrt(1 - zeta^2))).
+    The peaks are refined by a parabola through the three samples around each.
+
+    average_over: a moving average over that time first (e.g. the period of mode 2, which a released
+    cantilever carries at 2.5 % of its tip deflection and which would modulate the peaks).  The average
+    is linear and time-invariant: it multiplies every damped mode exp(lambda t) by a constant G(lambda),
+    so the decrement of mode 1 is unchanged."""
     t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    if average_over:
+        m = max(1, int(round(average_over / (t[1] - t[0]))))
+        t, y = t[m - 1:], np.convolve(y, np.ones(m) / m, mode="valid")
     i = np.where((y[1:-1] > y[:-2]) & (y[1:-1] >= y[2:]) & (y[1:-1] > 0))[0] + 1
     if len(i) < 2:
         raise ValueError("log_decrement_zeta: fewer than two maxima")

@@ -186,15 +186,9 @@ def test_bad_values_are_one_line_parameter_errors():
 # -- free decay: the logarithmic decrement against zeta = alpha/(2 omega) + tau omega/2 ---------
 
 def decrement_zeta(t, y, omega2, after):
-    """zeta of mode 1 from the logarithmic decrement of y(t > after), after a moving average over one
-    period of mode 2 (frequency omega2).  The average is linear and time-invariant: it multiplies a
-    damped mode exp(lambda t) by a constant G(lambda), so the decrement of mode 1 is unchanged, while
-    mode 2 (2.5 % of a released cantilever's tip deflection; as lightly damped as mode 1 under
-    Rayleigh's alpha) is removed instead of modulating the peaks."""
-    m = max(1, int(round(2 * np.pi / omega2 / (t[1] - t[0]))))
+    """zeta of mode 1 from the logarithmic decrement of y(t > after), averaged over mode 2's period."""
     keep = t > after
-    yf = np.convolve(y[keep], np.ones(m) / m, mode="valid")
-    return damping.log_decrement_zeta(t[keep][m - 1:], yf)
+    return damping.log_decrement_zeta(t[keep], y[keep], average_over=2 * np.pi / omega2)
 
 
 def undamped_omega(problem, k=1):
