@@ -80,7 +80,7 @@ def cost_table():
                 rows.append({"model": model, "variant": name, "scene": scene, "n_elements": n, "steps": steps,
                              **r, "ratio": r["ms_per_step"] / base})
                 print(f"  {model} n = {n} {name:18s}: {r['ms_per_step']:.2f} ms/step, {r['dofs']} dofs, "
-                      f"{r['newton_its']:.2f} its, x {r['ratio']:.2f}", flush=True)
+                      f"{r['newton_its']:.2f} its, x {rows[-1]['ratio']:.2f}", flush=True)
     return rows
 
 
