@@ -234,6 +234,29 @@ def test_free_decay_rod_cantilever(tau, alpha):
     assert np.all(np.diff(res.column("dissipated")) >= 0)
 
 
+@pytest.mark.parametrize("model", ["planar", "rod"])
+def test_linearization_has_the_proportional_modal_damping(model):
+    """The linearized damped model (`rodfem modes`: eigenvalues s_k = -zeta_k |s_k| + i omega_d) has, in
+    its first four modes, zeta_k = alpha/(2 omega_k) + tau omega_k/2 and |s_k| = omega_k with omega_k of
+    the undamped model: C = alpha M + tau K exactly (the dashpots see the strains' projected rates).
+    Modes 2-4 too, which the free decay above does not measure."""
+    tau, alpha = 4e-4, 1.0
+    if model == "planar":
+        scene = load("cantilever-2d")
+        make = lambda t, a: scene.build(scene.values({"tau_kv": t, "rayleigh_alpha": a}), MPI.COMM_WORLD)  # noqa: E731
+    else:
+        tau, alpha = 4e-3, 0.5
+        make = lambda t, a: rod(cosserat_rod.rayleigh(a, t, C_N, C_M) if t or a else None)  # noqa: E731
+    omega = undamped_omega(make(0.0, 0.0), 4)
+    lin = Linearization(make(tau, alpha))
+    omega_d, _, _ = natural_modes(lin, 4, "dense")
+    zeta = lin.damping
+    theory = damping.zeta_rayleigh(omega, alpha, tau)
+    print(f"{model}: omega {omega}, zeta {zeta}, theory {theory}")
+    assert np.allclose(zeta, theory, rtol=1e-8, atol=0)
+    assert np.allclose(np.asarray(omega_d) / np.sqrt(1 - zeta ** 2), omega, rtol=1e-8, atol=0)
+
+
 # -- Kelvin-Voigt is the limit of a stiff Maxwell branch ------------------------------------------
 
 def test_kelvin_voigt_is_the_stiff_maxwell_limit():
