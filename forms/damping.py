@@ -12,13 +12,19 @@ elastic one but NOT the strain rows, so in port-Hamiltonian form
     E x' = (J - R) z + B_u u,     R = B^* D B >= 0   (acting on the velocity efforts),
     d_t H = - int (B z).D (B z) ds + y.u,
 
-and no extra state is needed.  Discretely (rodfem/core/integrators.py) the viscous stress is
-D B(x_m) z_m with the step's midpoint velocities z_m, the same efforts that test the momentum
-rows; testing with them gives, for the midpoint rule and the discrete gradient alike,
+and no extra state is needed.  Discretely (rodfem/core/integrators.py) the strain rate is the
+step's rate of the mixed element's strain fields, e_n = (eps_{n+1} - eps_n)/h = Pi B(x_m) z_m (Pi: the
+L2 projection on the strain/stress space, which the strain rows apply to the midpoint strain rate;
+the elastic stresses see the same projected strains, and the pointwise rate would lock), so
+R = B^* Pi^* D Pi B >= 0.  The viscous stress D e_n lies in the stress space (D constant), so testing
+the momentum rows with the midpoint velocities z_m and the strain rows with D e_n gives, for the
+midpoint rule and the discrete gradient alike,
 
-    H_{n+1} - H_n = -h d_n + h y.u,     h d_n = h int (B z_m).D (B z_m) ds >= 0
+    H_{n+1} - H_n = -h d_n + h y.u,     h d_n = h int e_n.D e_n ds >= 0
 
-exactly (the model's `dissipation`, booked in the history's `dissipated`).
+exactly (the model's `dissipation`, booked in the history's `dissipated`).  For a straight beam the
+linearized damping matrix is then C = tau_d K + alpha M exactly (below), so every mode k has
+zeta_k = alpha/(2 omega_k) + tau_d omega_k/2 (tests/models/test_damping.py).
 
 Choice of D: the viscosities are a retardation time tau_d times the section's small-strain
 stiffnesses, eta_i = tau_d k_i (k = EA, GA, EI, GJ, ...): a homogeneous Kelvin-Voigt solid

@@ -57,8 +57,9 @@ step's strain rates, the rates of the strain fields,
 
 i.e. the midpoint strain rates projected on DG_{k-1} by the strain rows (Pi), like the elastic
 stresses (the pointwise rate would lock: with P1 its shear part damps bending 1 + GA h^2/(12 EI)
-times too much, zeta_1 = 0.69 instead of 0.021 on the steel strip of cantilever-2d), and the forces alpha (rhoA v_m, rhoI omega_m) (Rayleigh's mass part).  As a PH structure
-it is R = B^* Pi^* D Pi B >= 0 on the velocity efforts (B: the strain-rate operator).  Testing the
+times too much, zeta_1 = 0.69 instead of 0.021 on the steel strip of cantilever-2d), and the
+forces alpha (rhoA v_m, rhoI omega_m) (Rayleigh's mass part).  As a PH structure it is
+R = B^* Pi^* D Pi B >= 0 on the velocity efforts (B: the strain-rate operator).  Testing the
 momentum rows with (v_m, omega_m) and the strain rows with D e (a DG_{k-1} field: exact with any
 quadrature) gives, for both rules,
 
