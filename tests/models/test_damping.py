@@ -261,20 +261,20 @@ def test_linearization_has_the_proportional_modal_damping(model):
 
 def test_kelvin_voigt_is_the_stiff_maxwell_limit():
     """A Maxwell branch of stiffness c k and relaxation time tau/c carries sigma_1 = tau k d_t eps
-    - (tau/c) d_t sigma_1: the Kelvin-Voigt dashpot tau k up to O(tau/c).  c = 4, 16, 64: the tip
-    histories approach the Kelvin-Voigt one by 4x each time (h = tau/80 resolves the branch)."""
-    tau, h, T = 0.02, 2.5e-4, 0.8
+    - (tau/c) d_t sigma_1: the Kelvin-Voigt dashpot tau k up to O(tau/c).  c = 2, 4, 8: the tip
+    histories approach the Kelvin-Voigt one by 2x each time (h <= tau/(5c) resolves the branch)."""
+    tau, h, T = 0.02, 5e-4, 0.8
     load_ = ramp_release([0.0, -1.0], 0.3)
     kv = run(planar(planar_beam.kelvin_voigt(tau, 100.0, 100.0, 10.0), load=load_), h, T)
     diffs = []
-    for c in (4.0, 16.0, 64.0):
+    for c in (2.0, 4.0, 8.0):
         mx = run(planar(branches=[planar_beam.maxwell(tau / c, EA=100 * c, GA=100 * c, EI=10 * c)], load=load_), h, T)
         diffs.append(max(np.max(np.abs(mx.column(k) - kv.column(k))) / np.max(np.abs(kv.column(k)))
                          for k in ("tip_x", "tip_y")))
-    print("KV vs Maxwell (c = 4, 16, 64): " + ", ".join(f"{d:.2e}" for d in diffs))
-    assert diffs[0] <= 2e-2                                   # measured 9.7e-3, 2.4e-3, 6.0e-4
+    print("KV vs Maxwell (c = 2, 4, 8): " + ", ".join(f"{d:.2e}" for d in diffs))
+    assert diffs[0] <= 4e-2                                   # measured 1.9e-2, 9.7e-3, 4.8e-3
     for a, b in zip(diffs, diffs[1:]):
-        assert 3.0 <= a / b <= 5.0                            # first order in tau/c
+        assert 1.6 <= a / b <= 2.4                            # first order in tau/c
 
 
 # -- objectivity: a rigid rotation dissipates nothing -------------------------------------------
