@@ -33,8 +33,8 @@ moduli have the same Poisson ratio).  This is D = tau_d K, the damping matrix of
 codes: soromox (github.com/tud-phi/soromox) writes D = eta diag(J, 3I, 3I, 3A, A, A) for an
 incompressible material, E = 3G, i.e. our D with tau_d = eta/G; the SoRoSim toolbox (Mathew,
 Ben Hmida, Armanini, Boyer, Renda, "SoRoSim: a MATLAB toolbox for hybrid rigid-soft robots based
-on the geometric variable-strain approach", IEEE Robot. Autom. Mag. 30 (2023), DOI
-10.1109/MRA.2022.3202488) likewise damps the strain rates.  Then every mode of a straight,
+on the geometric variable-strain approach", IEEE Robot. Autom. Mag. 30(3)
+(2023)) likewise damps the strain rates.  Then every mode of a straight,
 unstressed rod has the damping ratio zeta_k = tau_d omega_k / 2 (classical, stiffness-proportional
 damping); for the Euler-Bernoulli cantilever zeta_1 = eta omega_1 / (2 E) (strain-rate damping:
 Banks, Inman, "On damping mechanisms in beams", J. Appl. Mech. 58 (1991) 716, DOI
