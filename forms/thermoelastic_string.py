@@ -95,6 +95,11 @@ dashpots take out, sum_k R_k z_k^2 >= 0, is a heat source in the entropy row,
 so the total energy stays exact (test with deta = theta: the dashpots' loss is the heat's gain;
 nothing is booked as `dissipated`) and the entropy grows by h int sum_k R_k z_k^2 / theta more.
 
+Kelvin-Voigt and Rayleigh damping (forms/damping.py, `damping=string.kelvin_voigt(tau_d, EA)`):
+the viscous stress S_v = eta (d_s r . d_s v)_m of forms/string.py in the v-row, and its work
+S_v (d_s r . d_s v)_m (+ alpha rhoA |v_m|^2, Rayleigh's mass part) as a heat source in the
+entropy row, the same way: the total energy stays exact.
+
 Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the end's
 temperature, power Q) and convection to an environment at theta_env (input theta_env,
 power h_c int (theta_env - theta) ds); their work is in `supplied`.
@@ -121,8 +126,8 @@ class ThermoelasticString(String):
               "temperature": ("temperature theta(C, eta) = de/d eta", ())}
     static_fields = None   # no statics: the thermal rows have no total form here
 
-    def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=()):
-        super().__init__(material, rhoA, end_masses, branches)
+    def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=(), damping=None):
+        super().__init__(material, rhoA, end_masses, branches, damping)
         if self.branches:   # the branch strains C_k after the thermal fields
             self.fields = ThermoelasticString.fields + [Field(f"C_{k}", "DG", 0)
                                                         for k in range(1, len(self.branches) + 1)]
@@ -188,6 +193,14 @@ class ThermoelasticString(String):
         heat = 0   # the Maxwell dashpots' dissipation sum_k R_k z_k^2, a heat source in the entropy row
         for Wk, R in branches:
             S, heat = S + 2 * Wk, heat + R * Wk ** 2
+        end_heat = None   # Rayleigh's mass part at lumped end masses: heat at the end points
+        if self.damping is not None:   # Kelvin-Voigt (and Rayleigh): the viscous work becomes heat too
+            Sv, Edot = self._viscous(step, dom)
+            S, heat = S + Sv, heat + Sv * Edot
+            if self.damping.alpha > 0:
+                a = self.damping.mass_rate(dom)
+                heat = heat + a * self.constants(dom)["rhoA"] * ufl.inner(v, v)
+                end_heat = self._lumped(ds, a * ufl.inner(v, v) * deta / theta)
         F = (ufl.inner(step.rate("r") - v, dr)
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
@@ -198,6 +211,12 @@ class ThermoelasticString(String):
         for i, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):   # as in forms/string.py
             row = step.rate(f"C_{i}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
             F += b.row_scale(step, dom) * row * test[f"C_{i}"] * dx
+        if self.damping is not None and self.damping.alpha > 0:   # Rayleigh's mass part, as in forms/string.py
+            a = self.damping.mass_rate(dom)
+            F += a * self.constants(dom)["rhoA"] * ufl.inner(v, dv) * dx
+            ends_v = self._lumped(ds, a * ufl.inner(v, dv))
+            F = F + ends_v if ends_v is not None else F
+            F = F - end_heat if end_heat is not None else F
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
 
@@ -216,7 +235,8 @@ class ThermoelasticString(String):
         return zC, dT / k["c"]
 
     def dissipation(self, step, dx, ds):
-        """None: the total energy is conserved (conduction moves heat, the dashpots turn work into heat)."""
+        """None: the total energy is conserved (conduction moves heat, the dashpots and the Kelvin-Voigt
+        or Rayleigh damping turn work into heat)."""
         return None
 
     def compatible_strains(self, x):

@@ -161,6 +161,28 @@ def test_ports_and_coupled_energy_balance_exact():
     assert np.ptp(res.column("supplied")) > 0.1
 
 
+@pytest.mark.parametrize("kind", ["kelvin-voigt", "rayleigh"])
+def test_viscous_damping_work_becomes_heat(kind):
+    """Kelvin-Voigt / Rayleigh damping (forms/damping.py) on the thermoelastic string with alpha = 0: the
+    motion is the damped String's to round-off, the heat gained is its `dissipated`, H exact."""
+    from rodfem.forms.string import String, kelvin_voigt, rayleigh
+    damping = kelvin_voigt(0.01, 100.0) if kind == "kelvin-voigt" else rayleigh(0.5, 0.005, 100.0)
+    init = {"r": lambda x: np.vstack([1.05 * x[0], 0.05 * np.sin(np.pi * x[0]), 0.02 * np.sin(2 * np.pi * x[0])])}
+    sup = [Support("left", "pinned"), Support("right", "pinned")]
+    plain = run(Problem(String(logarithmic(EA=100.0), 1.0, damping=damping), 1.0, 12, initial=init, supports=sup,
+                        integrator="discrete-gradient"), 0.01, 0.3)
+    model = ThermoelasticString(logarithmic(EA=100.0), 1.0, alpha=0.0, c=2.0, kappa=0.5, theta0=THETA0,
+                                damping=damping)
+    thermo = run(Problem(model, 1.0, 12, initial=init, supports=sup, integrator="discrete-gradient"), 0.01, 0.3)
+    assert "dissipated" not in thermo.rows[0]
+    for col in ("mean_x", "mean_y", "mean_z"):
+        assert np.max(np.abs(thermo.column(col) - plain.column(col))) <= 1e-12
+    heat, lost = 2.0 * (thermo.column("mean_temperature") - THETA0), plain.column("dissipated")
+    # measured 1.8e-11 J (Rayleigh) = 3e-14 of c theta0 L: the Newton tolerances of both runs summed over the steps
+    assert lost[-1] > 1e-3 and np.max(np.abs(heat - lost)) <= 1e-13 * 2.0 * THETA0
+    assert np.max(np.abs(thermo.column("balance_error"))) <= 1e-13 * 2.0 * THETA0
+
+
 def test_maxwell_dashpot_work_becomes_heat():
     """A Maxwell branch on the thermoelastic string with alpha = 0 (mechanics blind to temperature): the
     motion is that of the viscoelastic String (forms/string.py) to round-off, the heat gained
