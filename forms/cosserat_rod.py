@@ -262,6 +262,11 @@ class CosseratRod:
               "kappa": ("curvatures kappa = dW*/dM from the stress-free reference (the state's field; "
                         "non-quadratic materials only)", ("torsion", "bend2", "bend3"))}
 
+    # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
+    units = {"r": "m", **{d: "1" for d in DIRECTORS}, "v": "m/s", **{w: "1/s" for w in RATES},
+             "lam": "N", "strain_from_N": "1", "strain_from_M": "1/m", "gamma": "1", "kappa": "1/m",
+             "N": "N", "M": "N m"}
+
     def __init__(self, rhoA, rhoJ, C_N=None, C_M=None, branches=(), material=None):
         self.rhoA = float(rhoA)
         if not self.rhoA >= 0:  # also NaN

@@ -38,6 +38,8 @@ Optional, for what a run writes (rodfem/io/snapshot.py, rodfem/io/frames.py):
                  (n, 3, 3), columns d1 (axis), d2, d3 (the section); a planar model's plane is
                  z = 0, d3 = e_z.  Without it a body has no section (a string: a round tube)
 ``labels``       dict field or output name -> (description, component names)
+``units``        dict field or output name -> its SI unit ("1": dimensionless), written in the
+                 files' field data and fields.json
 ``massless``     True when the model has no inertia: its velocities (the values of
                  ``kinematics``) are not written
 ``box()``        a rigid body's edge lengths (a1, a2, a3) along (d1, d2, d3), for pictures

@@ -10,6 +10,10 @@ surface     the section swept along the centreline (rodfem/io/sections.py), one 
             the velocities, cell data the derived fields of the segment, exact at its
             midpoint (strains and stress resultants cell by cell, jumps included); a rigid body: its box.
 Planar models are drawn in the plane z = 0 (2-vectors get z = 0).
+
+Active attributes (what ParaView's filters take by default): the centreline's Normals are d2 (a
+4-sided Tube then follows the section, Glyph orients by it), Vectors the velocity, Scalars the speed
+|v| (s without a velocity); the surface's Vectors and Scalars the same.
 """
 import numpy as np
 
@@ -38,9 +42,12 @@ def _array(labels, name, values):
     return Array(values, comps)
 
 
-def point_arrays(state, labels, rings=None, keep=None):
+SPEED = "speed"
+
+
+def point_arrays(state, labels, rings=None, keep=None, velocity=None):
     """{name: Array} of the nodal fields (and frame) of `state`, at the nodes `rings` (all by default);
-    only s and the fields named in `keep`, if given."""
+    only s and the fields named in `keep`, if given; the speed |velocity| if `velocity` names a field."""
     pick = slice(None) if rings is None else rings
     out = {}
     if state.kind in ("rod", "line"):
@@ -48,6 +55,8 @@ def point_arrays(state, labels, rings=None, keep=None):
     for name, vals in state.fields.items():
         if keep is None or name in keep:
             out[name] = _array(labels, name, vals[pick])
+    if velocity in state.fields:
+        out[SPEED] = Array(np.linalg.norm(state.fields[velocity][pick], axis=1))
     if state.directors is not None and keep is None:
         for i in range(3 if state.dim == 3 else 2):       # (a planar model's d3 is e_z)
             name = f"d{i + 1}"
@@ -56,22 +65,28 @@ def point_arrays(state, labels, rings=None, keep=None):
     return out
 
 
-def centreline(state, labels):
-    """The centreline PolyData of a BodyState."""
+def active(point_data, velocity):
+    """The active attributes of point data: Normals d2, Vectors the velocity, Scalars the speed (or s)."""
+    return {"Normals": "d2", "Vectors": velocity, "Scalars": SPEED if SPEED in point_data else "s"}
+
+
+def centreline(state, labels, velocity=None):
+    """The centreline PolyData of a BodyState (`velocity`: the name of its velocity field, if written)."""
     n = len(state.position)
     poly = PolyData(points=state.position)
     if state.kind in ("rod", "line"):
         poly.lines = [np.arange(n)]
     else:
         poly.verts = [np.arange(n)]
-    poly.point_data = point_arrays(state, labels)
+    poly.point_data = point_arrays(state, labels, velocity=velocity)
     for name, vals in state.cells.items():
         if name != "s":
             poly.point_data[name] = _array(labels, name, at_nodes(vals, state.degree))
+    poly.active["PointData"] = active(poly.point_data, velocity)
     return poly
 
 
-def surface(state, labels, width, box_size, keep=()):
+def surface(state, labels, width, box_size, keep=(), velocity=None):
     """The surface PolyData of a BodyState: a rod's section (width x width/2), a string's round tube
     (diameter width/2), a rigid body's box of edges box_size(state.box, width).  Point data: s and the
     nodal fields named in `keep` (the velocities); cell data: the derived fields."""
@@ -92,7 +107,8 @@ def surface(state, labels, width, box_size, keep=()):
     m = len(section)
     poly = PolyData(points=points, polys=polys)
     poly.point_data = {k: Array(np.repeat(a.values, m, axis=0), a.components)
-                       for k, a in point_arrays(state, labels, rings, keep).items()}
+                       for k, a in point_arrays(state, labels, rings, keep, velocity).items()}
+    poly.active["PointData"] = {k: v for k, v in active(poly.point_data, velocity).items() if k != "Normals"}
     # the segment of a surface segment [rings[j], rings[j+1]]: the node segment at its middle
     seg = (rings[:-1] + rings[1:] - 1) // 2
     order = np.repeat(seg, m)
@@ -104,23 +120,27 @@ def surface(state, labels, width, box_size, keep=()):
     return poly
 
 
-def describe(state, labels, omitted, keep=()):
-    """What the files hold for this body: {file: {array: {"components", "description"}}} (fields.json)."""
+def describe(state, labels, omitted, keep=(), velocity=None, units=None):
+    """What the files hold for this body: {file: {array: {"components", "description", "unit"}}}
+    (fields.json); `units`: {array: SI unit} (every array's, rodfem/io/output.py)."""
     def entry(name, arr):
         what = labels.get(name, ("", ()))[0]
         if not what and name.startswith("d") and name[1:] in "123":
             what = FRAME_LABEL.format(name)
         if name == "s":
             what = "arc length of the reference configuration"
-        return {"components": list(arr.components), "description": what}
-    cl = centreline(state, labels)
+        if name == SPEED:
+            what = f"speed |{velocity}|"
+        return {"components": list(arr.components), "description": what, "unit": (units or {}).get(name, "")}
+    cl = centreline(state, labels, velocity)
     nodal = {k: entry(k, a) for k, a in cl.point_data.items()}
     derived = [k for k in state.cells if k != "s"]
     for k in derived:
         nodal[k]["description"] += "; at a node between two cells the mean of their values"
-    out = {"kind": state.kind, "centreline point data": nodal}
+    out = {"kind": state.kind, "centreline point data": nodal,
+           "active attributes": {k: v for k, v in cl.active["PointData"].items() if v in nodal}}
     if state.kind in ("rod", "line"):
-        out["surface point data"] = {k: v for k, v in nodal.items() if k == "s" or k in keep}
+        out["surface point data"] = {k: v for k, v in nodal.items() if k in ("s", SPEED) or k in keep}
         out["surface cell data"] = {k: dict(nodal[k], description=labels.get(k, ("", ()))[0] +
                                             "; the value at the segment's midpoint") for k in derived}
     if omitted:

@@ -14,8 +14,13 @@
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
 
-The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included; adaptive steps:
-at the `frames` evenly spaced times, which the steps land on); the
+The frames are at the `frames` evenly spaced times t_j = j t_end / (frames - 1) (t = 0 and t_end
+included; `frame_plan`): a time on a time level is that level's state; a time between two levels
+t_n < t_j < t_{n+1} gets the state interpolated linearly between them (`snapshot.blend`: the
+midpoint rule moves q on a straight line over a step); adaptive steps land on the t_j.  Every
+frame file carries its time (field data TimeValue, the .pvd's timestep), written as the shortest
+decimal of 12 significant digits (`clean_time`: 2.4, not n dt = 2.4000000000000004), and the SI
+units of its arrays (field data `units`, "name [unit]"; also in fields.json).  The
 section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
 computed from the state gathered on rank 0 (rodfem/io/snapshot.py): the same on any number of ranks.
 
@@ -41,8 +46,8 @@ from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
 from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
 from rodfem.io.frames import centreline, describe, surface
-from rodfem.io.snapshot import BodyView
-from rodfem.io.vtk import write_pvd, write_vtp
+from rodfem.io.snapshot import BodyView, blend
+from rodfem.io.vtk import Array, write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
@@ -152,13 +157,30 @@ class OutDir:
                 os.unlink(path)
 
 
-def frame_levels(n_steps, frames):
-    """The time levels (0..n_steps) written as frames: `frames` of them, evenly spaced, t = 0 and t_end
-    included; every level if there are fewer; t_end alone for frames = 1."""
+def frame_plan(n_steps, frames):
+    """The frames of a run of n_steps fixed steps: [(n, theta)], frame j at t_n + theta h, evenly
+    spaced with t = 0 and t_end (j n_steps / (frames - 1) levels, in exact integer arithmetic: theta
+    = 0 on a level); every level if there are fewer; t_end alone for frames = 1."""
     if frames <= 1:
-        return {n_steps}
-    k = min(frames, n_steps + 1)
-    return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
+        return [(n_steps, 0.0)]
+    k = min(frames, n_steps + 1) - 1
+    return [(j * n_steps // k, (j * n_steps % k) / k) for j in range(k + 1)]
+
+
+def frame_levels(n_steps, frames):
+    """The time levels whose states are frames as they are (theta = 0 in `frame_plan`)."""
+    return {n for n, theta in frame_plan(n_steps, frames) if theta == 0}
+
+
+def clean_time(t):
+    """t to 12 significant digits (the step sum's round-off gone: 2.4000000000000004 -> 2.4)."""
+    return float(f"{t:.12g}")
+
+
+def units_list(poly, units):
+    """The field data `units` of a frame: "name [unit]" for its points and every array."""
+    names = ["points", *poly.point_data, *(k for k in poly.cell_data if k not in poly.point_data)]
+    return [f"{name} [{units.get(name, '')}]" for name in names] + ["TimeValue [s]"]
 
 
 def plotting():
@@ -184,7 +206,10 @@ class RunWriter:
         plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
         # adaptive steps (n_steps None): the frames at the `times` the steps land on
-        self.levels = frame_levels(n_steps, frames) if times is None else set()
+        plan = frame_plan(n_steps, frames) if times is None else []
+        self.levels = {n for n, theta in plan if theta == 0}
+        self.between = {n: theta for n, theta in plan if theta > 0}   # frames between level n and n + 1
+        self._held = None                                               # (n, t_n, states at n)
         self.times = None if times is None else set(times)
         self.views = [BodyView(name, body) for name, body in problem.body_items()]
         self.section, self.width = float(section), None
@@ -195,9 +220,21 @@ class RunWriter:
     # -- per step (collective) ----------------------------------------------------
     def record(self, row, problem):
         self.out.do("write history.csv", self._append, row)
-        if self.count in self.levels or (self.times is not None and row["t"] in self.times):
+        n = self.count
+        if n in self.levels or (self.times is not None and row["t"] in self.times):
             self.frame(row["t"])
+        if self._held is not None and self._held[0] == n - 1:     # a frame between level n - 1 and n
+            _, t0, before = self._held
+            theta, self._held = self.between[n - 1], None
+            after = [view.gather() for view in self.views]      # collective
+            self.frame(t0 + theta * (row["t"] - t0), [blend(a, b, theta) for a, b in zip(before, after)])
+        self.hold(n, row["t"])
         self.count += 1
+
+    def hold(self, n, t):
+        """Keep the state of level n if a frame lies between it and the next level (collective)."""
+        if n in self.between:
+            self._held = (n, t, [view.gather() for view in self.views])
 
     def _append(self, row):
         """One whole row of history.csv: a write that fails (a full disk) leaves the file at the end of
@@ -220,9 +257,11 @@ class RunWriter:
             raise
         self._whole = self._file.tell()
 
-    def frame(self, t):
-        states = [view.gather() for view in self.views]  # collective
-        self.out.do("write a frame", self._write_frame, t, states)
+    def frame(self, t, states=None):
+        """Write the frame of time t: the current state, or `states` (BodyStates on rank 0).  Collective."""
+        if states is None:
+            states = [view.gather() for view in self.views]
+        self.out.do("write a frame", self._write_frame, clean_time(t), states)
 
     def file_name(self, kind, k, view):
         """centreline/frame_00007.vtp (one body) or centreline/frame_00007_crank.vtp (a system's body)."""
@@ -235,9 +274,10 @@ class RunWriter:
         names = []
         for view, state in zip(self.views, states):
             files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
-            polys = (centreline(state, view.labels),
-                     surface(state, view.labels, self.width, box_size, view.rates))
+            polys = (centreline(state, view.labels, view.velocity),
+                     surface(state, view.labels, self.width, box_size, view.rates, view.velocity))
             for name, poly in zip(files, polys):
+                poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, view.units)}
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
             names.append(files)
         self.frames.append((t, names))
@@ -255,9 +295,12 @@ class RunWriter:
         os.makedirs(self.out.file("surface"), exist_ok=True)
         fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
                               "string diameter": 0.5 * self.width},
+                  "time": {"unit": "s", "frames": "field data TimeValue and the .pvd's timestep: the frame's "
+                           "time t_j = j t_end / (frames - 1) (12 significant digits); the state of "
+                           "that time level, or interpolated linearly between the two levels around it"},
                   "bodies": {view.name or "body": dict(model=type(view.model).__name__,
                                                        **describe(state, view.labels, view.omitted,
-                                                                  view.rates))
+                                                                  view.rates, view.velocity, view.units))
                              for view, state in zip(self.views, states)}}
         write_json(self.out.file("fields.json"), fields)
 

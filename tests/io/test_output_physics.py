@@ -117,3 +117,71 @@ def test_coupled_and_nonquadratic_materials_export_their_strains(tmp_path):
         want = nodal_p2(cell_ends(problem, name))
         assert np.max(np.abs(c.point_data[name].values - want)) <= 1e-14 + 1e-12 * np.max(np.abs(want))
     assert "strain_from_N" not in c.point_data
+
+
+# -- active attributes, units, times ------------------------------------------------------------------------
+
+def test_frames_on_the_requested_times_interpolated_between_levels(tmp_path):
+    """10 steps of 0.1 s, 4 frames: t = 0, 1/3, 2/3, 1 (written 0.333333333333, ...: 12 digits), the middle
+    two between levels 3, 4 and 6, 7.  The same run with a frame at every level is the oracle: an
+    interpolated frame is (1 - theta) x_n + theta x_{n+1} of its points and every array (theta = 1/3,
+    2/3), a frame on a level is that level's; every file's TimeValue is its .pvd time."""
+    scene_run("flying-spaghetti-3d", tmp_path / "a", n_elements=4, t_end=1.0, frames=4)
+    scene_run("flying-spaghetti-3d", tmp_path / "b", n_elements=4, t_end=1.0, frames=11)
+    for kind in ("centreline", "surface"):
+        a, b = read_pvd(tmp_path / "a" / f"{kind}.pvd"), read_pvd(tmp_path / "b" / f"{kind}.pvd")
+        assert [t for t, *_ in a] == [0.0, 0.333333333333, 0.666666666667, 1.0]
+        assert [t for t, *_ in b] == [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0]   # clean: not 0.30000000000000004
+        levels = [read_vtp(tmp_path / "b" / f) for _, _, f, _ in b]
+        for (t, _, f, _), (n, theta) in zip(a, [(0, 0.0), (3, 1 / 3), (6, 2 / 3), (10, 0.0)]):
+            got = read_vtp(tmp_path / "a" / f)
+            assert got.field_data["TimeValue"].values.tolist() == [t]
+            x, y = levels[n], levels[min(n + 1, 10)]
+            assert np.max(np.abs(got.points - ((1 - theta) * x.points + theta * y.points))) <= 1e-14
+            for data in ("point_data", "cell_data"):
+                for k, arr in getattr(got, data).items():
+                    want = (1 - theta) * getattr(x, data)[k].values + theta * getattr(y, data)[k].values
+                    if k == "speed":     # the speed of the interpolated velocity
+                        want = np.linalg.norm(got.point_data["v"].values, axis=1)
+                    assert np.max(np.abs(arr.values - want)) <= 1e-13 * max(np.max(np.abs(want)), 1.0), (k, t)
+        for t, _, f, _ in b:
+            assert read_vtp(tmp_path / "b" / f).field_data["TimeValue"].values.tolist() == [t]
+
+
+def test_active_attributes_and_units_of_every_file(tmp_path):
+    """A rod (planar and 3D), a string and a rigid body: the centreline's Normals are d2, Vectors the
+    velocity, Scalars the speed |v|; the surface's Vectors and Scalars the same; every array, the
+    points and TimeValue have a unit in the field data `units`, the same as fields.json's."""
+    import json
+    runs = {"flying-spaghetti-2d": dict(n_elements=4, t_end=0.2, dt=0.1, frames=2),
+            "flying-spaghetti-3d": dict(n_elements=2, t_end=0.2, frames=2),
+            "crane-payload": dict(t_end=0.2, frames=2)}
+    for scene, params in runs.items():
+        out = tmp_path / scene
+        scene_run(scene, out, **params)
+        bodies = json.loads((out / "fields.json").read_text())["bodies"]
+        for t, _, f, name in read_pvd(out / "centreline.pvd") + read_pvd(out / "surface.pvd"):
+            poly = read_vtp(out / f)
+            body = bodies[name or "body"]
+            surface = f.startswith("surface")
+            units = dict(u[:-1].split(" [") for u in poly.field_data["units"])
+            if surface and body["kind"] in ("box", "point"):      # a rigid body's box: points only
+                assert not poly.point_data and units == {"points": "m", "TimeValue": "s"}
+                continue
+            active = poly.active["PointData"]
+            v = poly.point_data["v"].values
+            assert active["Vectors"] == "v" and active["Scalars"] == "speed"
+            assert np.array_equal(poly.point_data["speed"].values, np.linalg.norm(v, axis=1))
+            if body["kind"] in ("rod", "box") and not surface:
+                assert active["Normals"] == "d2"
+            else:
+                assert "Normals" not in active
+            assert set(units) == {"points", "TimeValue", *poly.point_data, *poly.cell_data}
+            assert units["points"] == "m" and units["TimeValue"] == "s" and units["v"] == "m/s"
+            listed = {**body["centreline point data"], **body.get("surface cell data", {})}
+            for k in [*poly.point_data, *poly.cell_data]:
+                assert units[k] == listed[k]["unit"] != "", (scene, k)
+        assert json.loads((out / "fields.json").read_text())["time"]["unit"] == "s"
+    units = dict(u[:-1].split(" [") for u in read_vtp(tmp_path / "flying-spaghetti-3d" / "centreline" /
+                                                         "frame_00001.vtp").field_data["units"])
+    assert units["strain_from_N"] == "1" and units["strain_from_M"] == "1/m" and units["M"] == "N m"
