@@ -42,6 +42,7 @@ from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, relaxation_time, stiffness
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod
+from rodfem.io.sections import Section
 
 parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     stiffness("L", 1.0, "m", "length"),
@@ -72,9 +73,11 @@ def rod(p):
     if p["E1"] > 0:
         G1 = p["E1"] / (2 * (1 + p["nu"]))
         branches.append(cosserat_rod.maxwell(p["tau1"], C_M=(1 / (G1 * J), 1 / (p["E1"] * I), 1 / (p["E1"] * I))))
-    return cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I),
-                                    C_N=(0.0, 0.0, 0.0), C_M=(1 / (G * J), 1 / (p["E"] * I), 1 / (p["E"] * I)),
-                                    branches=branches)
+    rod = cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I),
+                                   C_N=(0.0, 0.0, 0.0), C_M=(1 / (G * J), 1 / (p["E"] * I), 1 / (p["E"] * I)),
+                                   branches=branches)
+    rod.section = Section.round(p["radius"])   # what surface/ and the pictures draw
+    return rod
 
 
 def pulse(value, t_load):

@@ -93,7 +93,8 @@ def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
         Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
                   "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
         Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
-                  "(height: half of it; 0: a 25th of the longest body)", low=0),
+                  "(height: half of it; 0: the scene's cross-section if it has one, else a 25th of the "
+                  "longest body)", low=0),
         *stepping(),
     ]
 

@@ -17,7 +17,7 @@ Active attributes (what ParaView's filters take by default): the centreline's No
 """
 import numpy as np
 
-from rodfem.io.sections import box, rotation_minimizing, section_points, stride, sweep
+from rodfem.io.sections import Section, box, rotation_minimizing, section_points, stride, sweep
 from rodfem.io.snapshot import at_midpoints, at_nodes
 from rodfem.io.vtk import Array, PolyData
 
@@ -86,10 +86,19 @@ def centreline(state, labels, velocity=None):
     return poly
 
 
-def surface(state, labels, width, box_size, keep=(), velocity=None):
-    """The surface PolyData of a BodyState: a rod's section (width x width/2), a string's round tube
-    (diameter width/2), a rigid body's box of edges box_size(state.box, width).  Point data: s and the
-    nodal fields named in `keep` (the velocities); cell data: the derived fields."""
+def drawn_section(model, width, given=0.0):
+    """The Section drawn for a rod: the model's (the scene's physical section) unless a drawing width
+    is `given` (> 0); else a width x width/2 rectangle."""
+    if getattr(model, "section", None) is not None and not given:
+        return model.section
+    return Section.rectangle(width, 0.5 * width)
+
+
+def surface(state, labels, width, box_size, keep=(), velocity=None, section=None):
+    """The surface PolyData of a BodyState: a rod's `section` (a Section; default a width x width/2
+    rectangle), a string's round tube (diameter width/2), a rigid body's box of edges
+    box_size(state.box, width).  Point data: s and the nodal fields named in `keep` (the velocities);
+    cell data: the derived fields."""
     if state.kind in ("box", "point"):
         frame = state.directors[0] if state.directors is not None else np.eye(3)
         points, polys = box(state.position[0], frame, box_size(state.box, width))
@@ -97,23 +106,28 @@ def surface(state, labels, width, box_size, keep=(), velocity=None):
     n = len(state.position)
     rings = stride(n, MAX_SEGMENTS)
     centre = state.position[rings]
+    fan = False
     if state.kind == "rod":
         e2, e3 = state.directors[rings, :, 1], state.directors[rings, :, 2]
-        section = section_points(width, 0.5 * width, round_=False)
+        section = section or Section.rectangle(width, 0.5 * width)
+        fan = section.shape == "round"
+        section = section.points()
     else:
         e2, e3 = rotation_minimizing(centre)
         section = section_points(0.5 * width, 0.5 * width, round_=True)
-    points, polys = sweep(centre, e2, e3, section, caps=state.kind == "rod")
+    points, polys = sweep(centre, e2, e3, section, caps=state.kind == "rod", fan=fan)
     m = len(section)
     poly = PolyData(points=points, polys=polys)
-    poly.point_data = {k: Array(np.repeat(a.values, m, axis=0), a.components)
+    centres = [0, -1] if fan else []        # the caps' centre points (fan caps), last
+    poly.point_data = {k: Array(np.concatenate([np.repeat(a.values, m, axis=0), a.values[centres]]), a.components)
                        for k, a in point_arrays(state, labels, rings, keep, velocity).items()}
     poly.active["PointData"] = {k: v for k, v in active(poly.point_data, velocity).items() if k != "Normals"}
     # the segment of a surface segment [rings[j], rings[j+1]]: the node segment at its middle
     seg = (rings[:-1] + rings[1:] - 1) // 2
     order = np.repeat(seg, m)
     if state.kind == "rod":                 # the caps take the values of the end segments
-        order = np.concatenate([[seg[0]], order, [seg[-1]]])
+        cap = m if fan else 1
+        order = np.concatenate([[seg[0]] * cap, order, [seg[-1]] * cap])
     for name, vals in state.cells.items():
         if name != "s":
             poly.cell_data[name] = _array(labels, name, at_midpoints(vals)[order])

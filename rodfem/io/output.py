@@ -14,7 +14,9 @@
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
 
-The frames are at the `frames` evenly spaced times t_j = j t_end / (frames - 1) (t = 0 and t_end
+A rod's surface shows the scene's physical cross-section (the model's ``section``, a
+rodfem.io.sections.Section: round with a marker fin along d2, or rectangular) unless the `section`
+parameter gives a drawing width.  The frames are at the `frames` evenly spaced times t_j = j t_end / (frames - 1) (t = 0 and t_end
 included; `frame_plan`): a time on a time level is that level's state; a time between two levels
 t_n < t_j < t_{n+1} gets the state interpolated linearly between them (`snapshot.blend`: the
 midpoint rule moves q on a straight line over a step); adaptive steps land on the t_j.  Every
@@ -45,7 +47,7 @@ import numpy as np
 from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
 from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
-from rodfem.io.frames import centreline, describe, surface
+from rodfem.io.frames import centreline, describe, drawn_section, surface
 from rodfem.io.snapshot import BodyView, blend
 from rodfem.io.vtk import Array, write_pvd, write_vtp
 
@@ -275,7 +277,8 @@ class RunWriter:
         for view, state in zip(self.views, states):
             files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
             polys = (centreline(state, view.labels, view.velocity),
-                     surface(state, view.labels, self.width, box_size, view.rates, view.velocity))
+                     surface(state, view.labels, self.width, box_size, view.rates, view.velocity,
+                             drawn_section(view.model, self.width, self.section)))
             for name, poly in zip(files, polys):
                 poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, view.units)}
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
@@ -300,7 +303,10 @@ class RunWriter:
                            "that time level, or interpolated linearly between the two levels around it"},
                   "bodies": {view.name or "body": dict(model=type(view.model).__name__,
                                                        **describe(state, view.labels, view.omitted,
-                                                                  view.rates, view.velocity, view.units))
+                                                                  view.rates, view.velocity, view.units),
+                                                       **({"section": drawn_section(view.model, self.width,
+                                                                                    self.section).describe()}
+                                                          if state.kind == "rod" else {}))
                              for view, state in zip(self.views, states)}}
         write_json(self.out.file("fields.json"), fields)
 

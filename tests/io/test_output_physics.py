@@ -185,3 +185,57 @@ def test_active_attributes_and_units_of_every_file(tmp_path):
     units = dict(u[:-1].split(" [") for u in read_vtp(tmp_path / "flying-spaghetti-3d" / "centreline" /
                                                          "frame_00001.vtp").field_data["units"])
     assert units["strain_from_N"] == "1" and units["strain_from_M"] == "1/m" and units["M"] == "N m"
+
+
+# -- the drawn section is the physical one --------------------------------------------------------------------
+
+def test_round_section_of_the_scene_turns_with_the_directors(tmp_path):
+    """viscoelastic-cantilever-3d (a rod of radius 2 mm): every ring of the surface is r + R (cos a d2 +
+    sin a d3) at 24 angles with the exported directors, the point at a = 0 (along d2) at 1.25 R (the
+    marker fin); the caps are fans about the end points facing -d1(0) and +d1(L); fields.json names the
+    section.  With the `section` parameter (a drawing width) the rectangle is drawn instead."""
+    import json
+
+    from rodfem.io.sections import FIN, ROUND_SIDES
+    _, _, p = scene_run("viscoelastic-cantilever-3d", tmp_path / "a", n_elements=4, dt=0.005, t_end=0.03, frames=2)
+    R = p["radius"]
+    for t, _, f, _ in read_pvd(tmp_path / "a" / "centreline.pvd"):
+        c = read_vtp(tmp_path / "a" / f)
+        surf = read_vtp(tmp_path / "a" / f.replace("centreline", "surface"))
+        n = len(c.points)
+        d1, d2, d3 = (c.point_data[f"d{i}"].values for i in (1, 2, 3))
+        a = 2 * np.pi * np.arange(ROUND_SIDES) / ROUND_SIDES
+        rad = np.where(np.arange(ROUND_SIDES) == 0, FIN * R, R)
+        want = (c.points[:, None, :] + (rad * np.cos(a))[None, :, None] * d2[:, None, :]
+                + (rad * np.sin(a))[None, :, None] * d3[:, None, :])
+        rings = surf.points[:-2].reshape(n, ROUND_SIDES, 3)
+        assert np.max(np.abs(rings - want)) <= 1e-15 and np.array_equal(surf.points[-2:], c.points[[0, -1]])
+        assert np.max(np.abs(np.linalg.norm(rings[:, 1:] - c.points[:, None], axis=2) - R)) <= 1e-15
+        assert np.max(np.abs(np.einsum("ni,ni->n", rings[:, 0] - c.points, d2) - FIN * R)) <= 1e-15
+        polys = [np.asarray(q) for q in surf.polys]
+        assert len(polys) == ROUND_SIDES * (n - 1) + 2 * ROUND_SIDES
+        for cap, node, sign in ((polys[:ROUND_SIDES], 0, -1.0), (polys[-ROUND_SIDES:], -1, 1.0)):
+            for tri in cap:
+                q = surf.points[tri]
+                normal = np.cross(q[1] - q[0], q[2] - q[0])
+                assert sign * normal @ d1[node] > 0.99 * np.linalg.norm(normal)
+        assert len(surf.cell_data["N"].values) == len(polys)
+    section = json.loads((tmp_path / "a" / "fields.json").read_text())["bodies"]["body"]["section"]
+    assert section["shape"] == "round" and section["diameter"] == 2 * R and section["unit"] == "m"
+    scene_run("viscoelastic-cantilever-3d", tmp_path / "b", n_elements=4, dt=0.005, t_end=0.01, frames=1,
+              section=0.1)
+    surf = read_vtp(tmp_path / "b" / "surface" / "frame_00000.vtp")
+    assert len(surf.points) == 4 * 9 and len(surf.polys) == 4 * 8 + 2
+
+
+def test_four_bar_beams_have_their_square_section(tmp_path):
+    """four-bar-2d (5 cm square steel beams): each body's surface corners are r +- w/2 d2 +- w/2 e_z."""
+    _, _, p = scene_run("four-bar-2d", tmp_path, t_end=0.02, frames=1)
+    w = p["width"]
+    for t, _, f, name in read_pvd(tmp_path / "centreline.pvd"):
+        c = read_vtp(tmp_path / f)
+        surf = read_vtp(tmp_path / f.replace("centreline", "surface"))
+        d2 = c.point_data["d2"].values
+        corners = surf.points.reshape(len(c.points), 4, 3) - c.points[:, None, :]
+        local = np.stack([np.einsum("nki,ni->nk", corners, d2), corners[:, :, 2]], axis=2)
+        assert np.allclose(np.abs(local), w / 2, rtol=1e-12, atol=0), name
