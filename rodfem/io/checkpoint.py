@@ -481,4 +481,5 @@ def kept_sketch(path, view, width):
             d.append(np.tile([0.0, 0.0, 1.0], (len(poly.points), 1)))
         directors = np.stack(d, axis=-1)
     box = tuple(view.model.box()) if view.body.rigid and hasattr(view.model, "box") else None
-    return sketch(SimpleNamespace(kind=view.kind, position=poly.points, directors=directors, box=box), width)
+    return sketch(SimpleNamespace(name=view.name, kind=view.kind, position=poly.points, directors=directors, box=box),
+                  width)

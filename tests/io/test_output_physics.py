@@ -239,3 +239,62 @@ def test_four_bar_beams_have_their_square_section(tmp_path):
         corners = surf.points.reshape(len(c.points), 4, 3) - c.points[:, None, :]
         local = np.stack([np.einsum("nki,ni->nk", corners, d2), corners[:, :, 2]], axis=2)
         assert np.allclose(np.abs(local), w / 2, rtol=1e-12, atol=0), name
+
+
+# -- pictures -----------------------------------------------------------------------------------------------
+
+def rod_sketch(points, name=""):
+    from rodfem.io.animation import Sketch
+    points = np.asarray(points, dtype=float)
+    d2 = np.tile([0.0, 1.0, 0.0], (len(points), 1))
+    return Sketch("rod", points, d2=d2, name=name)
+
+
+def test_picture_layout_plane_and_window():
+    """A 3D rod moving in the plane z = 2: drawn in 2D on (x, y); in y = -1: on (x, z); else 3D.  A rod of length 1
+    flying 20 m: the window (one size, the rod's extent plus margins) follows it and holds every frame;
+    swinging within its own size: one fixed window holding all frames."""
+    from rodfem.io.animation import Layout
+    s = np.linspace(0, 1, 11)
+    fly = [(t, [rod_sketch(np.column_stack([s + 2 * t, 0 * s, 0 * s + 2.0]))]) for t in range(11)]
+    lay = Layout(fly, 3, 0.01)
+    assert lay.axes == (0, 1) and lay.follows
+    for k, (_, sk) in enumerate(fly):
+        lo, hi = lay.window(k)
+        pts = sk[0].line[:, [0, 1]]
+        assert np.all(pts >= lo) and np.all(pts <= hi)
+        assert np.allclose(hi - lo, lay.size) and lay.size < 2.0
+    tilt = [(t, [rod_sketch(np.column_stack([s, t * s ** 2, t * s]))]) for t in (0.0, 0.5)]
+    assert Layout(tilt, 3, 0.01).axes == (0, 1, 2)
+    in_xz = [(t, [rod_sketch(np.column_stack([s, 0 * s - 1.0, t * s]))]) for t in (0.0, 0.5)]
+    assert Layout(in_xz, 3, 0.01).axes == (0, 2)
+    swing = [(a, [rod_sketch(np.column_stack([np.cos(a) * s, np.sin(a) * s]))]) for a in np.linspace(0, 3, 7)]
+    lay = Layout([(t, [rod_sketch(np.column_stack([sk[0].line, 0 * s]))]) for t, sk in swing], 2, 0.01)
+    assert lay.axes == (0, 1) and not lay.follows
+    assert all(np.array_equal(lay.window(k)[0], lay.window(0)[0]) for k in range(7))
+    lo, hi = lay.window(0)
+    every = np.concatenate([sk[0].line[:, :2] for _, sk in swing])
+    assert np.all(every >= lo) and np.all(every <= hi)
+
+
+def test_animation_and_shapes_colour_each_body(tmp_path):
+    """Two bodies: every GIF frame shows both bodies' colours (tab:blue, tab:orange), one frame per
+    snapshot; shapes.png draws with a time colour bar (a wider figure than the axes alone)."""
+    from PIL import Image
+
+    from rodfem.io.animation import plot_shapes, write_animation
+    s = np.linspace(0, 1, 11)
+    snaps = [(0.1 * k, [rod_sketch(np.column_stack([s, 0.1 * k * s, 0 * s]), "a"),
+                        rod_sketch(np.column_stack([s, 1 + 0 * s, 0 * s]) + [0.0, 0.05 * k, 0.0], "b")])
+             for k in range(5)]
+    write_animation(tmp_path / "a.gif", snaps, 2, 0.02)
+    with Image.open(tmp_path / "a.gif") as gif:
+        assert gif.n_frames == 5
+        for k in range(5):
+            gif.seek(k)
+            rgb = np.asarray(gif.convert("RGB")).reshape(-1, 3).astype(int)
+            for colour in ((31, 119, 180), (255, 127, 14)):
+                assert np.min(np.abs(rgb - colour).sum(axis=1)) <= 12, (k, colour)
+    plot_shapes(tmp_path / "s.png", snaps, 2, 0.02)
+    with Image.open(tmp_path / "s.png") as png:
+        assert png.size[0] > png.size[1]
