@@ -50,6 +50,11 @@ def sketch(state, width):
     return sk
 
 
+def marks_sketch(points):
+    """The Sketch of the joints, components and supports at a frame (rodfem/io/glyphs.py): their points."""
+    return Sketch("marks", np.asarray(points, dtype=float).reshape(-1, 3).copy(), name="joints")
+
+
 def box_size(edges, width):
     """Edges of a rigid body's box; a missing or zero edge (a plate, a point mass) gets width / 2."""
     edges = np.zeros(3) if edges is None else np.asarray(edges, dtype=float)
@@ -141,6 +146,13 @@ class Canvas:
         artists = [] if new else artists
         for b, sk in enumerate(sketches):
             colour, lab = colours[b], (labels[b] if labels else None)
+            if sk.kind == "marks":         # joints, components, supports: hollow black circles on top
+                if new:
+                    artists.append([self.ax.plot(*sk.line[:, ax_].T, "o", mfc="white", mec="black", ms=5, mew=1.2,
+                                                 zorder=5, **({"label": lab} if lab else {}))[0]])
+                else:
+                    self._set(artists[b][0], sk.line[:, ax_])
+                continue
             if sk.kind in ("rod", "line"):
                 parts = [sk.line[:, ax_]]
                 if sk.kind == "rod" and ribbons:
@@ -179,8 +191,13 @@ class Canvas:
 
 
 def _names(sketches):
-    """The bodies' names for a legend (None for one body)."""
+    """The bodies' names for a legend (None for one body and no joints)."""
     return [sk.name or f"body {b + 1}" for b, sk in enumerate(sketches)] if len(sketches) > 1 else None
+
+
+def _bodies(sketches):
+    """The number of bodies among the sketches (the joints' sketch is not one)."""
+    return sum(sk.kind != "marks" for sk in sketches)
 
 
 def plot_shapes(path, snapshots, dim, width, max_shapes=16, time_label="t [s]"):
@@ -190,7 +207,7 @@ def plot_shapes(path, snapshots, dim, width, max_shapes=16, time_label="t [s]"):
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import LinearSegmentedColormap, Normalize
     from matplotlib.lines import Line2D
-    bodies = len(snapshots[0][1])
+    bodies, drawn = _bodies(snapshots[0][1]), len(snapshots[0][1])
     most = max_shapes if bodies == 1 else max(2, max_shapes // 2)
     idx = np.unique(np.linspace(0, len(snapshots) - 1, min(most, len(snapshots))).astype(int))
     layout = Layout([snapshots[i] for i in idx], dim, width)
@@ -202,11 +219,14 @@ def plot_shapes(path, snapshots, dim, width, max_shapes=16, time_label="t [s]"):
     for j, i in enumerate(idx):
         x = j / max(len(idx) - 1, 1)
         shade = x if bodies == 1 else 0.3 + 0.7 * x       # (the lightest shades are invisible on white)
-        canvas.draw(snapshots[i][1], [maps[b % len(maps)](shade) for b in range(bodies)], ribbons=False)
+        last = j == len(idx) - 1                          # the joints: at the last shape only
+        sketches = [sk for sk in snapshots[i][1] if last or sk.kind != "marks"]
+        canvas.draw(sketches, [maps[b % len(maps)](shade) for b in range(drawn)], ribbons=False)
     names = _names(snapshots[0][1])
     if names:
-        canvas.ax.legend([Line2D([], [], color=maps[b](0.85), lw=2) for b in range(bodies)], names,
-                         loc="best", fontsize=8)
+        handles = [Line2D([], [], color=maps[b % len(maps)](0.85), lw=2) if sk.kind != "marks" else
+                   Line2D([], [], ls="", marker="o", mfc="white", mec="black") for b, sk in enumerate(snapshots[0][1])]
+        canvas.ax.legend(handles, names, loc="best", fontsize=8)
     grey = plt.get_cmap("Greys")
     shades = maps[0] if bodies == 1 else LinearSegmentedColormap.from_list("time", [grey(0.3), grey(1.0)])
     bar = ScalarMappable(norm=Normalize(t0, t1 if t1 > t0 else t0 + 1), cmap=shades)
@@ -224,11 +244,11 @@ def write_animation(path, snapshots, dim, width, duration=6.0, dpi=80):
     canvas = Canvas(layout, " ")
     fig, ax = canvas.fig, canvas.ax
     fig.set_dpi(dpi)
-    bodies = len(snapshots[0][1])
-    colours = [COLOURS[b % len(COLOURS)] for b in range(bodies)]
+    drawn = len(snapshots[0][1])
+    colours = [COLOURS[b % len(COLOURS)] for b in range(drawn)]
     canvas.limits(*layout.window(0))
     artists = canvas.draw(snapshots[0][1], colours, labels=_names(snapshots[0][1]))
-    if bodies > 1:
+    if drawn > 1:
         ax.legend(loc="upper right", fontsize=7)
     moving = [a for body in artists for a in body]
     clock = fig.text(0.5, 0.97, "", ha="center", va="top")

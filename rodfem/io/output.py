@@ -10,6 +10,8 @@
 * surface.pvd, surface/         each body's surface: its section swept along the centreline and
                  turned with the directors (rods), a tube (strings), a box (rigid bodies), with the
                  strains and stress resultants cell by cell (rodfem/io/frames.py)
+* joints.pvd, joints/   the joints, components and supports as points (and lines between a
+                 joint's two points when apart), one block (rodfem/io/glyphs.py); none without any
 * fields.json    what every array of those files is (components, description), per body
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
@@ -46,14 +48,16 @@ import numpy as np
 
 from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
-from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
+from rodfem.io.animation import box_size, marks_sketch, plot_shapes, sketch, write_animation
 from rodfem.io.frames import centreline, describe, drawn_section, surface
+from rodfem.io.glyphs import glyphs, marks_of
 from rodfem.io.snapshot import BodyView, blend
 from rodfem.io.vtk import Array, write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
              "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
+             "joints.pvd", "joints/frame_*.vtp", "joints/.*.tmp",
              "checkpoint.npz", "checkpoint.npz.tmp*",
              # the analyses' files (rodfem static / linearize / modes): a later run of any command clears them
              "loadsteps.csv", "modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "linear.mat", "linear.json",
@@ -214,6 +218,8 @@ class RunWriter:
         self._held = None                                               # (n, t_n, states at n)
         self.times = None if times is None else set(times)
         self.views = [BodyView(name, body) for name, body in problem.body_items()]
+        self.marks = marks_of(problem)          # joints, components, supports (joints.pvd)
+        self.mark_frames = []                   # [(t, file)]
         self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
         self.dim = max(v.dim for v in self.views)
@@ -284,7 +290,18 @@ class RunWriter:
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
             names.append(files)
         self.frames.append((t, names))
-        self.snapshots.append((t, [sketch(state, self.width) for state in states]))
+        sketches = [sketch(state, self.width) for state in states]
+        if self.marks:
+            name = f"joints/frame_{k:05d}.vtp"
+            poly = glyphs(self.marks, {v.name: st for v, st in zip(self.views, states)},
+                          {v.name: v.model for v in self.views})
+            poly.field_data.update({"TimeValue": Array(np.array([t])), "units": ["points [m]", "TimeValue [s]"]})
+            replace_atomically(self.out.file(name), lambda tmp: write_vtp(tmp, poly))
+            self.mark_frames.append((t, name))
+            replace_atomically(self.out.file("joints.pvd"),
+                               lambda tmp: write_pvd(tmp, [(tf, 0, f, "joints") for tf, f in self.mark_frames]))
+            sketches.append(marks_sketch(poly.points))
+        self.snapshots.append((t, sketches))
         for i, kind in enumerate(("centreline", "surface")):
             series = [(tf, b, files[b][i], view.name) for tf, files in self.frames
                       for b, view in enumerate(self.views)]
@@ -296,6 +313,8 @@ class RunWriter:
         boxes = [np.max(s.box) for s in states if s.box is not None]
         self.width = self.section or (max(lengths) / 25 if lengths else max(boxes, default=4.0) / 4)
         os.makedirs(self.out.file("surface"), exist_ok=True)
+        if self.marks:
+            os.makedirs(self.out.file("joints"), exist_ok=True)
         fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
                               "string diameter": 0.5 * self.width},
                   "time": {"unit": "s", "frames": "field data TimeValue and the .pvd's timestep: the frame's "

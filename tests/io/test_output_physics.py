@@ -298,3 +298,44 @@ def test_animation_and_shapes_colour_each_body(tmp_path):
     plot_shapes(tmp_path / "s.png", snaps, 2, 0.02)
     with Image.open(tmp_path / "s.png") as png:
         assert png.size[0] > png.size[1]
+
+
+# -- joints, components, supports -------------------------------------------------------------------------------
+
+def test_joints_block_puts_each_joint_where_its_bodies_are(tmp_path):
+    """slider-crank-3d: joints.pvd has a frame per frame; each joint's two points (from the bodies' exported
+    centres and directors with the joints' offsets) are where the bodies carry them: the ball and the
+    cardan joint's two sides meet (the constraints hold to round-off), the bearing's crank side is at the
+    ground point A; four-bar-2d: its pinned supports sit on the beams' ends."""
+    import json
+
+    from rodfem.io.glyphs import marks_of
+    problem, _, p = scene_run("slider-crank-3d", tmp_path / "sc", t_end=0.1, frames=3)
+    frames = read_pvd(tmp_path / "sc" / "joints.pvd")
+    assert [t for t, *_ in frames] == [t for t, *_ in read_pvd(tmp_path / "sc" / "centreline.pvd")][::3]
+    marks = marks_of(problem)
+    names = [m.name for m in marks]
+    for t, _, f, _ in frames:
+        poly = read_vtp(tmp_path / "sc" / f)
+        assert poly.field_data["marks"] == [f"{k} {m.name} ({m.what})" for k, m in enumerate(marks)]
+        ids = poly.point_data["mark"].values
+        x = {name: poly.points[ids == k] for k, name in enumerate(names)}
+        for joint in ("ball_B", "cardan_C"):
+            assert np.linalg.norm(x[joint][0] - x[joint][1]) <= 1e-10
+        k = names.index("bearing_A")
+        ground = [q for q in marks[k].points if q[0] is None][0]
+        assert np.allclose(x["bearing_A"], np.asarray(ground[2]), rtol=0, atol=1e-10)
+        # the crank side from the exported crank: centre + offset along its directors
+        c = read_vtp(tmp_path / "sc" / f.replace("joints/", "centreline/").replace(".vtp", "_crank.vtp"))
+        side = [q for q in marks[k].points if q[0] == "crank"][0]
+        R = np.column_stack([c.point_data[f"d{i}"].values[0] for i in (1, 2, 3)])
+        assert np.allclose(c.points[0] + R @ np.asarray(side[2]), x["bearing_A"][1], rtol=0, atol=1e-14)
+    assert poly.active["PointData"]["Scalars"] == "mark"
+    scene_run("four-bar-2d", tmp_path / "fb", t_end=0.02, frames=1)
+    poly = read_vtp(tmp_path / "fb" / "joints" / "frame_00000.vtp")
+    labels = [m.split(" ")[1] for m in poly.field_data["marks"]]
+    for body, end in (("crank", 0), ("rocker", -1)):
+        c = read_vtp(tmp_path / "fb" / "centreline" / f"frame_00000_{body}.vtp")
+        k = labels.index(f"{body}.{'left' if end == 0 else 'right'}")
+        assert np.array_equal(poly.points[poly.point_data["mark"].values == k][0], c.points[end])
+    assert "joints" not in json.dumps(json.loads((tmp_path / "fb" / "fields.json").read_text())["bodies"])

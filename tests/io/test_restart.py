@@ -362,7 +362,8 @@ def same_run(full, resumed, rtol):
     for k in header:
         largest(diffs, f"history.csv:{k}", difference(a[k], b[k]), rtol, k)
     frames = set()
-    for pvd in ("centreline.pvd", "surface.pvd"):
+    pvds = [pvd for pvd in ("centreline.pvd", "surface.pvd", "joints.pvd") if pvd in names]
+    for pvd in pvds:
         entries = read_pvd(os.path.join(full, pvd))
         assert read_pvd(os.path.join(resumed, pvd)) == entries, pvd   # times (repr), parts, files, bodies
         for *_, name, _ in entries:
@@ -378,7 +379,7 @@ def same_run(full, resumed, rtol):
                 for k in u:
                     assert u[k].components == v[k].components, (name, k)
                     largest(diffs, f"frames:{data}:{k}", difference(u[k].values, v[k].values), rtol, name)
-    assert {n for n in names if os.path.dirname(n) in ("centreline", "surface")} == frames   # none unnamed
+    assert {n for n in names if os.path.dirname(n) in ("centreline", "surface", "joints")} == frames   # none unnamed
     with open(os.path.join(full, "summary.json")) as f, open(os.path.join(resumed, "summary.json")) as g:
         s, r = json.load(f), json.load(g)
     for k in SUMMARY_NOT_COMPARED:
@@ -397,8 +398,7 @@ def same_run(full, resumed, rtol):
         with open(os.path.join(full, name), "rb") as f, open(os.path.join(resumed, name), "rb") as g:
             same, written = f.read() == g.read(), os.path.getsize(os.path.join(resumed, name)) > 0
         assert written and (same or rtol > 0), f"{name}: {'other bytes' if written else 'empty'}"
-    compared = {"history.csv", "centreline.pvd", "surface.pvd", "summary.json", "fields.json", "checkpoint.npz",
-                *frames, *PICTURES}
+    compared = {"history.csv", *pvds, "summary.json", "fields.json", "checkpoint.npz", *frames, *PICTURES}
     assert set(names) == compared, set(names) - compared          # every file looked at
     return diffs
 
