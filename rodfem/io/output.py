@@ -13,6 +13,7 @@
 * joints.pvd, joints/   the joints, components and supports as points (and lines between a
                  joint's two points when apart), one block (rodfem/io/glyphs.py); none without any
 * fields.json    what every array of those files is (components, description), per body
+* view.py        a ParaView script that opens the run (`paraview --script=view.py`; rodfem/io/paraview.py)
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
 
@@ -57,7 +58,7 @@ from rodfem.io.vtk import Array, write_pvd, write_vtp
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
              "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
-             "joints.pvd", "joints/frame_*.vtp", "joints/.*.tmp",
+             "joints.pvd", "joints/frame_*.vtp", "joints/.*.tmp", "view.py",
              "checkpoint.npz", "checkpoint.npz.tmp*",
              # the analyses' files (rodfem static / linearize / modes): a later run of any command clears them
              "loadsteps.csv", "modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "linear.mat", "linear.json",
@@ -352,6 +353,11 @@ class RunWriter:
     def _plots(self, result):
         if result is not None and result.rows:
             plot_energy(self.out.file("energy.png"), result)
+        if self.frames:
+            from rodfem.io.paraview import run_facts, write_script
+            units = {k: u for v in self.views for k, u in v.units.items()}
+            facts = run_facts(self.out.path, "blocks" if len(self.views) > 1 else None)
+            replace_atomically(self.out.file("view.py"), lambda tmp: write_script(tmp, facts, units))
         if self.snapshots:
             plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
             write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)

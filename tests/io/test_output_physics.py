@@ -339,3 +339,28 @@ def test_joints_block_puts_each_joint_where_its_bodies_are(tmp_path):
         k = labels.index(f"{body}.{'left' if end == 0 else 'right'}")
         assert np.array_equal(poly.points[poly.point_data["mark"].values == k][0], c.points[end])
     assert "joints" not in json.dumps(json.loads((tmp_path / "fb" / "fields.json").read_text())["bodies"])
+
+
+# -- the ParaView script -------------------------------------------------------------------------------------
+
+def test_view_script_has_the_ranges_of_all_frames(tmp_path):
+    """view.py is Python; its RUN holds every surface array's range per component over ALL frames (here
+    the flying spaghetti starts at rest: the first frame's range of the strains is [0, 0]), the box of
+    the motion of the centrelines, the frames' times, the default array (the first strain, a rod) and
+    the planar flag (the 3D rod moves in z = 0).  (benchmarks/bench_paraview.py opens it in ParaView.)"""
+    import ast
+    scene_run("flying-spaghetti-3d", tmp_path, n_elements=4, t_end=1.0, frames=5)
+    text = (tmp_path / "view.py").read_text()
+    compile(text, "view.py", "exec")
+    line = next(x for x in text.splitlines() if x.startswith("RUN = "))
+    run_ = ast.literal_eval(line[len("RUN = "):])
+    surfaces = [read_vtp(tmp_path / f) for _, _, f, _ in read_pvd(tmp_path / "surface.pvd")]
+    lines = [read_vtp(tmp_path / f) for _, _, f, _ in read_pvd(tmp_path / "centreline.pvd")]
+    strain = np.concatenate([s.cell_data["strain_from_N"].values for s in surfaces])
+    assert np.ptp(surfaces[0].cell_data["strain_from_N"].values) == 0
+    assert [r[1:] for r in run_["ranges"]["strain_from_N"]] == [(strain[:, k].min(), strain[:, k].max()) for k in range(3)]
+    assert run_["ranges"]["strain_from_N"][0][0] == "CELLS" and run_["ranges"]["speed"][0][0] == "POINTS"
+    points = np.concatenate([c.points for c in lines])
+    assert run_["bounds"] == [points.min(axis=0).tolist(), points.max(axis=0).tolist()]
+    assert run_["times"] == [0.0, 0.25, 0.5, 0.75, 1.0] and run_["array"] == "strain_from_N" and run_["planar"]
+    assert run_["units"]["strain_from_M"] == "1/m" and not run_["joints"]
