@@ -46,7 +46,11 @@ def sketch(state, width):
         sk.d2 = state.directors[keep, :, 1].copy()
     elif state.kind in ("box", "point"):
         frame = state.directors[0] if state.directors is not None else np.eye(3)
-        sk.edges = box_edges(state.position[0], frame, box_size(state.box, width))
+        if getattr(state, "link", None) is not None:       # a link: the segments between its points
+            pts = state.position[0] + np.asarray(state.link) @ np.asarray(frame).T
+            sk.kind, sk.edges = "link", np.stack([pts[:-1], pts[1:]], axis=1)
+        else:
+            sk.edges = box_edges(state.position[0], frame, box_size(state.box, width))
     return sk
 
 
@@ -174,7 +178,8 @@ class Canvas:
             else:
                 edges = sk.edges[:, :, ax_]
                 if new:
-                    artists.append([self.collection(edges, colors=[colour], linewidths=1.2, label=lab),
+                    thick = 3.0 if sk.kind == "link" else 1.2
+                    artists.append([self.collection(edges, colors=[colour], linewidths=thick, label=lab),
                                     self.ax.plot(*sk.line[:, ax_].T, "o", color=colour, ms=3)[0]])
                 else:
                     artists[b][0].set_segments(edges)

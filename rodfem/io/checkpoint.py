@@ -492,5 +492,6 @@ def kept_sketch(path, view, width):
             d.append(np.tile([0.0, 0.0, 1.0], (len(poly.points), 1)))
         directors = np.stack(d, axis=-1)
     box = tuple(view.model.box()) if view.body.rigid and hasattr(view.model, "box") else None
-    return sketch(SimpleNamespace(name=view.name, kind=view.kind, position=poly.points, directors=directors, box=box),
-                  width)
+    link = getattr(view.model, "link", None) if view.body.rigid else None
+    return sketch(SimpleNamespace(name=view.name, kind=view.kind, position=poly.points, directors=directors, box=box,
+                                  link=link), width)

@@ -17,7 +17,7 @@ Active attributes (what ParaView's filters take by default): the centreline's No
 """
 import numpy as np
 
-from rodfem.io.sections import Section, box, rotation_minimizing, section_points, stride, sweep
+from rodfem.io.sections import Section, box, link, rotation_minimizing, section_points, stride, sweep
 from rodfem.io.snapshot import at_midpoints, at_nodes
 from rodfem.io.vtk import Array, PolyData
 
@@ -97,10 +97,14 @@ def drawn_section(model, width, given=0.0):
 def surface(state, labels, width, box_size, keep=(), velocity=None, section=None):
     """The surface PolyData of a BodyState: a rod's `section` (a Section; default a width x width/2
     rectangle), a string's round tube (diameter width/2), a rigid body's box of edges
-    box_size(state.box, width).  Point data: s and the nodal fields named in `keep` (the velocities);
+    box_size(state.box, width) or, if the scene gives its link points (``model.link``), its `section`
+    along them.  Point data: s and the nodal fields named in `keep` (the velocities);
     cell data: the derived fields."""
     if state.kind in ("box", "point"):
         frame = state.directors[0] if state.directors is not None else np.eye(3)
+        if state.link is not None:          # the scene's drawing: a link through its points
+            points, polys = link(state.position[0], frame, state.link, section or Section.round(width / 4))
+            return PolyData(points=points, polys=polys)
         points, polys = box(state.position[0], frame, box_size(state.box, width))
         return PolyData(points=points, polys=polys)
     n = len(state.position)

@@ -110,6 +110,26 @@ def rotation_minimizing(centre):
     return e2, e3
 
 
+def link(centre, frame, offsets, section):
+    """A rigid body drawn as a link: `section` (a Section) swept straight from point to point of
+    `offsets` (k, 3, in the body frame: the columns of `frame`, about `centre`), each piece turned
+    with the director most across it.  Returns (points, polys) (each piece capped)."""
+    pts = centre + np.asarray(offsets, dtype=float) @ np.asarray(frame).T
+    points, polys, n = [], [], 0
+    for a, b in zip(pts[:-1], pts[1:]):
+        t = (b - a) / max(np.linalg.norm(b - a), 1e-300)
+        d = frame[:, np.argmin(np.abs(frame.T @ t))]
+        e2 = d - (d @ t) * t
+        e2 /= np.linalg.norm(e2)
+        e3 = np.cross(t, e2)
+        p, q = sweep(np.array([a, b]), np.array([e2, e2]), np.array([e3, e3]), section.points(),
+                     fan=section.shape == "round")
+        points.append(p)
+        polys += [c + n for c in q]
+        n += len(p)
+    return np.concatenate(points), polys
+
+
 def box(centre, frame, edges):
     """Points (24, 3) and 6 quads of a box centred at `centre` with axes the columns of `frame`
     (3, 3) and edge lengths `edges` (3,): four points per face, so that each face is flat-shaded."""

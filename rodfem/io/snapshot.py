@@ -47,6 +47,7 @@ class BodyState:
     cells: dict = field(default_factory=dict)
     degree: int = 1
     box: tuple = None
+    link: np.ndarray = None     # a rigid body drawn as a link: its points (k, 3) in the body frame
 
 
 class BodyView:
@@ -127,6 +128,8 @@ class BodyView:
             state.cells = by_name(np.concatenate([g[1] for g in gathered]), self._outputs[1])
         if body.rigid and hasattr(self.model, "box"):
             state.box = tuple(self.model.box())
+        if body.rigid and getattr(self.model, "link", None) is not None:
+            state.link = np.asarray(self.model.link, dtype=float)
         return state
 
 
@@ -141,7 +144,8 @@ def blend(a, b, theta):
     mix = lambda x, y: None if x is None else (1 - theta) * x + theta * y   # noqa: E731
     return BodyState(a.name, a.kind, a.dim, a.s, mix(a.position, b.position),
                      {k: mix(v, b.fields[k]) for k, v in a.fields.items()}, mix(a.directors, b.directors),
-                     {k: (v if k == "s" else mix(v, b.cells[k])) for k, v in a.cells.items()}, a.degree, a.box)
+                     {k: (v if k == "s" else mix(v, b.cells[k])) for k, v in a.cells.items()}, a.degree, a.box,
+                     a.link)
 
 
 def by_name(cells, names):

@@ -364,3 +364,23 @@ def test_view_script_has_the_ranges_of_all_frames(tmp_path):
     assert run_["bounds"] == [points.min(axis=0).tolist(), points.max(axis=0).tolist()]
     assert run_["times"] == [0.0, 0.25, 0.5, 0.75, 1.0] and run_["array"] == "strain_from_N" and run_["planar"]
     assert run_["units"]["strain_from_M"] == "1/m" and not run_["joints"]
+
+
+def test_slider_crank_links_run_between_their_joints(tmp_path):
+    """slider-crank-3d gives its crank and rod as links (1 cm bars between their joint points): the rod's
+    surface is two caps' centres at the ball and the cardan joint (joints.pvd), every ring 5 mm around
+    the axis (the fin at 6.25 mm); the slider stays its box (6 faces)."""
+    from rodfem.io.sections import FIN, ROUND_SIDES
+    scene_run("slider-crank-3d", tmp_path, t_end=0.1, frames=2)
+    joints = read_vtp(tmp_path / "joints" / "frame_00001.vtp")
+    names = [m.split(" ")[1] for m in joints.field_data["marks"]]
+    at = {n: joints.points[joints.point_data["mark"].values == k] for k, n in enumerate(names)}
+    rod = read_vtp(tmp_path / "surface" / "frame_00001_rod.vtp")
+    ends = rod.points[-2:]
+    assert np.linalg.norm(ends[0] - at["ball_B"][0]) <= 1e-12 and np.linalg.norm(ends[1] - at["cardan_C"][0]) <= 1e-12
+    axis = (ends[1] - ends[0]) / np.linalg.norm(ends[1] - ends[0])
+    rings = rod.points[:-2].reshape(2, ROUND_SIDES, 3) - ends[:, None, :]
+    assert np.max(np.abs(rings @ axis)) <= 1e-15
+    r = np.linalg.norm(rings, axis=2)
+    assert np.allclose(r[:, 1:], 0.005, rtol=1e-12) and np.allclose(r[:, 0], FIN * 0.005, rtol=1e-12)
+    assert len(read_vtp(tmp_path / "surface" / "frame_00001_slider.vtp").polys) == 6
