@@ -4,8 +4,16 @@ standard library's XML) and checked against the model's state, not against the w
 - the 3D rod's exported strains are the strains its stress resultants carry, C_N N and C_M M (the full
   compliance of a coupled quadratic material), or the state's strain fields of a non-quadratic material:
   DG1 fields, linear on every cell (no node-to-node zig-zag), averaged only at a node between two cells;
+- frames exactly at the requested times (interpolated between levels, against a run with a frame per
+  level), clean times, TimeValue per file; active attributes (Normals d2, Vectors v, Scalars speed) and
+  units in every file and fields.json;
+- the drawn section is the scene's (rings vs directors and radius, the fin along d2; square corners);
+  the slider crank's links end at their joints; the joints block puts each joint where its bodies are;
+- the pictures: the plane of a planar motion, a window that follows a travelling body, a colour per
+  body; view.py's colour ranges over all frames; serial == two ranks with interpolated frames and joints.
 """
 import numpy as np
+import pytest
 from mpi4py import MPI
 
 from rodfem.analysis.timeloop import run, steps_for
@@ -384,3 +392,27 @@ def test_slider_crank_links_run_between_their_joints(tmp_path):
     r = np.linalg.norm(rings, axis=2)
     assert np.allclose(r[:, 1:], 0.005, rtol=1e-12) and np.allclose(r[:, 0], FIN * 0.005, rtol=1e-12)
     assert len(read_vtp(tmp_path / "surface" / "frame_00001_slider.vtp").polys) == 6
+
+
+@pytest.mark.mpi
+def test_two_ranks_write_the_serial_interpolated_frames_and_joints(tmp_path):
+    """four-bar-2d over 5 steps with 4 frames (two of them between levels) by `mpirun -n 2`: the same
+    .pvd files, frame times, joints and view.py ranges as the serial run, every array to solver round-off."""
+    import ast
+
+    from processes import ok, rodfem
+    args = ["run", "four-bar-2d", "--set", "t_end=0.1", "--set", "dt=0.02", "--set", "frames=4", "--quiet"]
+    ok(rodfem(*args, "--out", tmp_path / "s"))
+    ok(rodfem(*args, "--out", tmp_path / "p", np=2))
+    for pvd in ("centreline.pvd", "surface.pvd", "joints.pvd"):
+        a, b = read_pvd(tmp_path / "s" / pvd), read_pvd(tmp_path / "p" / pvd)
+        assert a == b and [t for t, *_ in a][::len(a) // 4] == [0.0, 0.0333333333333, 0.0666666666667, 0.1]
+        for _, _, f, _ in a:
+            x, y = read_vtp(tmp_path / "s" / f), read_vtp(tmp_path / "p" / f)
+            assert np.allclose(x.points, y.points, rtol=0, atol=1e-13) and x.field_data == y.field_data
+            for data in ("point_data", "cell_data"):
+                for k, arr in getattr(x, data).items():
+                    assert np.allclose(arr.values, getattr(y, data)[k].values, rtol=1e-10, atol=1e-10), (f, k)
+    runs = [ast.literal_eval(next(x for x in (tmp_path / d / "view.py").read_text().splitlines()
+                                  if x.startswith("RUN = "))[6:]) for d in ("s", "p")]
+    assert runs[0]["times"] == runs[1]["times"] and runs[0]["array"] == runs[1]["array"] == "blocks"
