@@ -21,8 +21,10 @@ author = "the rodfem developers"
 copyright = "2026, the rodfem developers"
 from rodfem import __version__ as release  # noqa: E402
 
-extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax", "sphinxarg.ext"]
-myst_enable_extensions = ["dollarmath", "colon_fence"]
+extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinxarg.ext"]
+# Equations are plain text as in the docstrings: no MathJax, which a browser would fetch from the web.
+myst_enable_extensions = ["colon_fence"]
+smartquotes = False                     # `--out` stays two hyphens in prose
 myst_heading_anchors = 4
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
