@@ -53,6 +53,7 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
+DAMPING = "tests/models/test_damping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -609,6 +610,44 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- Kelvin-Voigt and Rayleigh damping (issue 25) --
+    M("kv-pointwise-strain-rate", "forms/planar_beam.py",
+      [('        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")\n',
+        '        A, r_s, v, w = rotation(step.mid("phi")), step.mid("r").dx(0), step.mid("v"), step.mid("omega")\n'
+        '        Gdot, kdot = A.T * (v.dx(0) - w * S_HAT * r_s), w.dx(0)\n')],
+      [DAMPING + "::test_free_decay_planar_cantilever[kv]"],
+      "the planar dashpots see the pointwise strain rate, not its projection: energy-consistent, but the P1 "
+      "element's shear part locks and over-damps bending"),
+    M("kv-dissipation-not-booked", "forms/planar_beam.py",
+      [("            d = d + ufl.inner(Nv, Gdot) + Mv * kdot\n", "")],
+      [DAMPING + "::test_exact_balance_with_damping[planar-kv-alpha-midpoint]"],
+      "the viscous stresses act, their dissipation is not booked in `dissipated`"),
+    M("rayleigh-alpha-force-missing", "forms/planar_beam.py",
+      [("            F += mass_damping\n", "            pass\n")],
+      [DAMPING + "::test_exact_balance_with_damping[planar-kv-alpha-midpoint]",
+       DAMPING + "::test_rigid_rotation_dissipates_nothing[planar]"],
+      "Rayleigh's -alpha rho v is booked as dissipated but never applied"),
+    M("rod-kv-moments-reversed", "forms/cosserat_rod.py",
+      [("[eN[i] for i in range(3)] + [eM[i] for i in range(3)])", "[eN[i] for i in range(3)] + [eM[2 - i] for i in range(3)])")],
+      [DAMPING + "::test_free_decay_rod_cantilever[kv]"],
+      "the 3D rod's torsion and bending viscosities swapped (balanced, a wrong damping ratio)"),
+    M("rod-kv-not-objective", "forms/cosserat_rod.py",
+      [("        eN, eM = self._strain_rates(step, domain)\n",
+        "        eN, eM = step.mid(\"v\").dx(0), self._strain_rates(step, domain)[1]\n")],
+      [DAMPING + "::test_rigid_rotation_dissipates_nothing[rod]"],
+      "the 3D rod's axial dashpot damps d_s v, which a rigid rotation has too (not objective)"),
+    M("string-alpha-end-mass-missing", "forms/string.py",
+      [("            ends_v = self._lumped(ds, alpha * ufl.inner(v, dv))\n", "            ends_v = None\n")],
+      [DAMPING + "::test_exact_balance_with_damping[string-kv-alpha-discrete-gradient]"],
+      "Rayleigh's mass part forgets the string's end masses (booked, not applied)"),
+    M("kv-negative-viscosity-accepted", "forms/damping.py",
+      [("        if not np.all(np.isfinite(eta)) or np.any(eta < 0):", "        if not np.all(np.isfinite(eta)):")],
+      [DAMPING + "::test_bad_values_are_one_line_parameter_errors"],
+      "a negative viscosity (an energy source) is accepted from the Python API"),
+    M("scene-ignores-tau-kv", "demos/_planar.py",
+      [('degree=p["degree"], damping=kv)', 'degree=p["degree"])')],
+      [DAMPING + "::test_free_decay_planar_cantilever[kv]"],
+      "cantilever-2d accepts --set tau_kv but builds the undamped beam"),
     # -- output (issue 27): what the files show is the model's state ------------------------------
     M("output-configuration-strain", "forms/cosserat_rod.py",
       [('strains = {"strain_from_N": CN, "strain_from_M": CM}',
