@@ -47,6 +47,7 @@ from rodfem.app.scene import Parameter, Scene, common, relaxation_time, stiffnes
 from rodfem.demos._damping import damping, damping_parameters
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod
+from rodfem.io.sections import Section
 
 parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     stiffness("L", 1.0, "m", "length"),
@@ -79,8 +80,10 @@ def rod(p):
         G1 = p["E1"] / (2 * (1 + p["nu"]))
         branches.append(cosserat_rod.maxwell(p["tau1"], C_M=(1 / (G1 * J), 1 / (p["E1"] * I), 1 / (p["E1"] * I))))
     C_N, C_M = (0.0, 0.0, 0.0), (1 / (G * J), 1 / (p["E"] * I), 1 / (p["E"] * I))
-    return cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I), C_N=C_N, C_M=C_M,
-                                    branches=branches, damping=damping(p, cosserat_rod.rayleigh, C_N, C_M))
+    rod = cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I), C_N=C_N, C_M=C_M,
+                                   branches=branches, damping=damping(p, cosserat_rod.rayleigh, C_N, C_M))
+    rod.section = Section.round(p["radius"])   # what surface/ and the pictures draw
+    return rod
 
 
 def pulse(value, t_load):

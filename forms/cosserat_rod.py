@@ -289,10 +289,12 @@ class CosseratRod:
               **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
               "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij "
                       "(reactions to them)", tuple(f"{i + 1}{j + 1}" for i, j in PAIRS)),
-              "Gamma": ("strains Gamma_i = d_i . d_s r - delta_i1 of the configuration "
-                        "(C_N N = Gamma - Gamma at rest)", ("axial", "shear2", "shear3")),
-              "K": ("curvatures K_i = 1/2 eps_ijk d_s d_j . d_k of the configuration: torsion, bending "
-                    "about d2, d3 (C_M M = K - K at rest)", ("torsion", "bend2", "bend3")),
+              "strain_from_N": ("strains C_N N from the stress-free reference: axial strain, shear strains "
+                                "(= Pi(Gamma(q)) - Pi(Gamma(q_ref)), Gamma_i = d_i . d_s r - delta_i1)",
+                                ("axial", "shear2", "shear3")),
+              "strain_from_M": ("curvatures C_M M from the stress-free reference: torsion, bending about d2, d3 "
+                                "(= Pi(K(q)) - Pi(K(q_ref)), K_i = 1/2 eps_ijk d_s d_j . d_k)",
+                                ("torsion", "bend2", "bend3")),
               "N": ("stress resultants N on (d1, d2, d3): axial and shear forces (the state's field)",
                     ("axial", "shear2", "shear3")),
               "M": ("moments M on (d1, d2, d3): torsion and bending moments (the state's field)",
@@ -301,6 +303,11 @@ class CosseratRod:
                         "non-quadratic materials only)", ("axial", "shear2", "shear3")),
               "kappa": ("curvatures kappa = dW*/dM from the stress-free reference (the state's field; "
                         "non-quadratic materials only)", ("torsion", "bend2", "bend3"))}
+
+    # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
+    units = {"r": "m", **{d: "1" for d in DIRECTORS}, "v": "m/s", **{w: "1/s" for w in RATES},
+             "lam": "N", "strain_from_N": "1", "strain_from_M": "1/m", "gamma": "1", "kappa": "1/m",
+             "N": "N", "M": "N m"}
 
     def __init__(self, rhoA, rhoJ, C_N=None, C_M=None, branches=(), material=None, damping=None):
         self.rhoA = float(rhoA)
@@ -498,16 +505,27 @@ class CosseratRod:
         return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
 
     def outputs(self, x):
-        """Strains Gamma, K of the configuration and the stress resultants N, M (UFL): the equilibrium
-        branch's plus every Maxwell branch's (parallel branches: the stresses add)."""
-        d = [x[n] for n in DIRECTORS]
+        """The model's strains and the stress resultants N, M (UFL).
+
+        The strains are those the stress resultants carry: strain_from_N = C_N N and strain_from_M =
+        C_M M (dW*/d(N, M) at the state of a quadratic material), the strains from the stress-free
+        reference; for any other material the state's strain fields gamma, kappa (module docstring).
+        They are DG1 like N and M (the configuration's Gamma(q), K(q), cubic and quadratic on a cell,
+        meet them only in the L2 projection Pi, so their nodal values oscillate from node to node).
+        N, M: the equilibrium branch's plus every Maxwell branch's (parallel branches: the stresses
+        add); the strains are the equilibrium branch's (every branch sees the rod's strain)."""
+        if self.general:
+            strains = {"gamma": x["gamma"], "kappa": x["kappa"]}
+        else:
+            CN, CM = self._compliance_rows(x["N"], x["M"], ufl.domain.extract_unique_domain(x["N"]))
+            strains = {"strain_from_N": CN, "strain_from_M": CM}
         N, M = x["N"], x["M"]
         for field in (f.name for f in self.fields):
             if field.startswith("N_"):
                 N = N + x[field]
             elif field.startswith("M_"):
                 M = M + x[field]
-        return {"Gamma": shear_strain(x["r"], d) - ufl.as_vector([1.0, 0.0, 0.0]), "K": curvature(d), "N": N, "M": M}
+        return {**strains, "N": N, "M": M}
 
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""

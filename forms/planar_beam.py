@@ -195,6 +195,8 @@ class PlanarBeam:
               "N": ("stress resultants N = dW/dGamma in the section frame: axial and shear force", ("axial", "shear")),
               "M": ("bending moment M = dW/dkappa", ())}
 
+    # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
+    units = {"r": "m", "phi": "rad", "v": "m/s", "omega": "rad/s", "Gamma": "1", "kappa": "1/m", "N": "N", "M": "N m"}
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
 
     def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None, branches=(), damping=None):

@@ -134,6 +134,8 @@ class String:
               "stretch": ("stretch sqrt(C) = |d_s r|", ()),
               "tension": ("tension N = 2 W'(C) sqrt(C) = |contact force|", ())}
 
+    units = {"r": "m", "v": "m/s", "C": "1", "stretch": "1", "tension": "N"}   # SI; "1": dimensionless
+
     def __init__(self, material, rhoA, end_masses=None, branches=(), damping=None):
         if not isinstance(material, Material):
             raise TypeError("material must be a Material, e.g. string_materials.logarithmic(EA=20)")
