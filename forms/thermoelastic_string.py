@@ -57,8 +57,8 @@ Gonzalez, J. Nonlinear Sci. 6 (1996) 449-467, doi 10.1007/BF02440162).  The ther
 written with sinh, free of cancellation: the heat content c theta0 L is large beside the
 elastic energy, and a quotient of differences of e (Gonzalez' formula on e as a whole,
 `step.effort`) would carry its round-off eps |e| / |dx| into the stress -- a Newton residual
-floor that grows with the mesh (152 Newton iterations per step, in failed and split steps, at 1000
-elements; 3-5 with the sinh quotient).
+floor (measured 1.6e-10 at 100 elements, above Newton's absolute tolerance 1e-10: the solve
+stopped on the step size after 4 iterations; with the sinh quotient 1e-11 after 3).
 grad_bar W is the string's (`step.effort` on W alone); the midpoint rule takes
 T'(xi_m) = c theta0 exp(xi_m) (sinh(x)/x -> 1) and W'(C_m).
 
