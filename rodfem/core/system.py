@@ -342,8 +342,10 @@ class System:
 
     def snapshot(self):
         """What a step changes of the loop's state: x_n and the control laws' states (`restore` puts them back:
-        a rejected step of the step-size control, rodfem/analysis/stepping.py)."""
+        a rejected step of the step-size control, rodfem/analysis/stepping.py).  x_n is read from the bodies, as
+        `predict` does: a change made to a body's x0 after `build` (a scene's static equilibrium) is x_n."""
         self.build()
+        self._pull(self.X0, "x0")
         return (self.X0.getArray(readonly=True).copy(),
                 [list(c.law.state) for c in self.components if getattr(c, "stateful", False)])
 
@@ -360,12 +362,17 @@ class System:
     def field_groups(self):
         """The owned entries of the loop's state vector by body and field (a list of index arrays, the same
         number on every rank): the step-size control (rodfem/analysis/stepping.py) measures each field against
-        its own size.  The multipliers (constraint forces, algebraic) are left out."""
+        its own size.  The multipliers (constraint forces, algebraic: the joints' and the bodies' fields at
+        t_{n+1} that the step does not carry over, `Body.algebraic_fields`) are left out: their values at
+        the middle and the end of a doubled step are not two approximations of one quantity."""
         self.build()
         groups = []
         for blk, ref in zip(self.blocks, self.bodies.values()):
             body, owned = ref.body, blk.hi - blk.lo
+            algebraic = set(body.algebraic_fields())
             for f in body.space.fields:
+                if f.name in algebraic:
+                    continue
                 dofs = body.space.field_dofs(f.name) if body.rigid else body.space.collapse(f.name)[1]
                 dofs = np.asarray(dofs, dtype=np.int64).ravel()
                 groups.append(blk.lo + dofs[dofs < owned])
