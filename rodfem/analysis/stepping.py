@@ -115,12 +115,16 @@ class ErrorNorm:
 
     def __call__(self, x0, x1, x_coarse, h):
         diff, size = np.zeros(len(self.groups)), np.zeros(len(self.groups))
-        for k, idx in enumerate(self.groups):
+        scaled = np.array([paired is not None for _, paired in self.groups], dtype=bool)
+        for k, (idx, paired) in enumerate(self.groups):
             if len(idx):
                 diff[k] = np.max(np.abs(x1[idx] - x_coarse[idx]))
-                size[k] = max(np.max(np.abs(x0[idx])), np.max(np.abs(x1[idx])))
+            against = idx if paired is None else paired   # an index-2 velocity: h e_v against its configuration
+            if len(against):
+                size[k] = max(np.max(np.abs(x0[against])), np.max(np.abs(x1[against])))
         self.comm.Allreduce(MPI.IN_PLACE, diff, op=MPI.MAX)
         self.comm.Allreduce(MPI.IN_PLACE, size, op=MPI.MAX)
+        diff[scaled] *= h
         e = diff / (2 ** ORDER - 1) / (self.atol + self.rtol * size) * (self.span / h if self.span else 1.0)
         if not np.all(np.isfinite(e)):
             return math.inf
