@@ -542,7 +542,7 @@ class PointIndex:
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
         self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
-        self.x0_values, self.times = None, (0.0, 0.0, 1.0)
+        self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
         """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
