@@ -30,6 +30,13 @@ keeps the energy balance H_{n+1} - H_n = -h_n d_n + h_n y.u with its own h_n:
   with exit 3.  The inputs u(t) are read at each step's midpoint: a variable h samples them at
   other times than a fixed one.
 
+``dt=auto`` (``run(problem, "auto", t_end, control=StepControl(adaptive=True, ...))``): an adaptive run
+whose first step is the scene's time scale as its outputs resolve it, the first interval between output
+times (the frames; t_end - t with none), at most (t_end - t)/10; until a step is accepted a rejection
+shrinks it by 0.9 err^(-1/(p+1)) with the floor 1e-3 instead of 0.2 (the first step sized by its own
+Richardson estimate, as Hairer, Norsett & Wanner, Solving Ordinary Differential Equations I, sec. II.4,
+size theirs by an explicit one); a Newton failure quarters it as for any step.
+
 Why step doubling and not the free estimate from the predictor: measured in benchmarks/stepping.md.
 """
 import math
@@ -40,6 +47,8 @@ from mpi4py import MPI
 
 ORDER = 2            # the midpoint rule and the discrete gradient are of second order
 SAFETY, GROW, SHRINK, FAILED = 0.9, 5.0, 0.2, 0.25
+FIRST_SHRINK = 1e-3  # dt=auto: the floor of a rejection's shrinking until a step is accepted
+AUTO = "auto"
 SPLIT_MAX = 1024     # fixed steps: dt_min = dt / SPLIT_MAX unless given
 ADAPTIVE_MIN = 1e-9  # adaptive: dt_min = ADAPTIVE_MIN t_end unless given
 
@@ -99,11 +108,18 @@ def next_step(h, err, after_reject, per_unit_step=False):
     return h * (min(fac, 1.0) if after_reject else fac)
 
 
-def shrunk(h, err, per_unit_step=False):
-    """The step to retry after a rejected step h with error `err` > 1 (inf: a Newton failure)."""
+def shrunk(h, err, per_unit_step=False, floor=SHRINK):
+    """The step to retry after a rejected step h with error `err` > 1 (inf: a Newton failure); `floor`: the
+    smallest factor (FIRST_SHRINK for the first step of dt=auto)."""
     if not math.isfinite(err):
         return FAILED * h
-    return h * max(SHRINK, min(1.0, SAFETY * err ** -exponent(per_unit_step)))
+    return h * max(floor, min(1.0, SAFETY * err ** -exponent(per_unit_step)))
+
+
+def first_step(t, t_end, output_times=()):
+    """dt=auto: the first interval between the output times after t (t_end - t with none), at most (t_end - t)/10."""
+    later = sorted(x for x in output_times if t < x < t_end) + [t_end]
+    return min(later[0] - t, 0.1 * (t_end - t))
 
 
 class ErrorNorm:

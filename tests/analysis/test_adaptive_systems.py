@@ -85,3 +85,26 @@ def test_the_error_norm_leaves_out_multipliers_and_scales_the_constrained_veloci
     scene = load("crane-manoeuvre")
     string = scene.build(scene.values({}), MPI.COMM_WORLD).build()
     assert all(paired is None for _, paired in string.field_groups()) and len(string.field_groups()) == 3
+
+
+def test_dt_auto_starts_from_the_scene_time_scale():
+    """dt=auto: adaptive steps whose first is the first interval between frames, at most t_end/10
+    (`stepping.first_step`), shrunk by its own estimate until accepted.  crane-manoeuvre to t = 1 with two
+    frames starts at 0.1 and meets the reference as dt = 0.05 does (within 3 rtol); fixed steps refuse it."""
+    from rodfem.analysis.stepping import first_step
+    from rodfem.app.driver import run_scene
+    from rodfem.errors import ParameterError
+    assert first_step(0.0, 1.0, (0.0, 1.0)) == 0.1 and first_step(0.0, 10.0, (0.0, 0.5, 1.0, 10.0)) == 0.5
+    assert first_step(2.0, 3.0, (0.0, 2.5, 3.0)) == 0.1
+    _, x_ref = simulate("crane-manoeuvre", 0.05 / 32, 1.0)
+    result, _ = run_scene("crane-manoeuvre", {"dt": "auto", "t_end": "1", "frames": "2", "rtol": "1e-4"})
+    last = result.rows[-1]
+    x = np.array([last[k] for k in ("tip_x", "tip_y", "tip_z")])
+    assert relative(x, x_ref) <= 3e-4 and last["t"] == 1.0
+    assert result.stepping["adaptive"] and result.rows[1]["h"] < 0.1
+    scene = load("crane-manoeuvre")
+    problem = scene.build(scene.values({}), MPI.COMM_WORLD)
+    with pytest.raises(ValueError, match="dt = auto needs adaptive steps"):
+        run(problem, "auto", 1.0)
+    with pytest.raises(ParameterError, match="parameter 'dt' must be a number > 0 or auto"):
+        scene.values({"dt": "soon"})
