@@ -17,18 +17,19 @@ keeps the energy balance H_{n+1} - H_n = -h_n d_n + h_n y.u with its own h_n:
 
       err = max over fields f of  max_i |e_i| / (atol + rtol max(|x_n|_inf,f, |x_{n+1}|_inf,f))  (* T / h)
 
-  (the multipliers, algebraic, left out).  err <= 1 accepts the pair, err > 1 rejects it; the next
-  h is h min(5, max(0.2, 0.9 err^(-1/(p+1)))) (per unit step err^(-1/p); no growth right after a
-  rejection).  Measured on the linear oscillator (two periods, rtol = 1e-2 ... 1e-6): per step the
-  global error grows from 2.7 to 68 rtol |x|, per unit step it is 0.24 rtol |x| throughout, at 5 to
-  22 times the steps.  Per unit step is not the default: where a field starts at zero (a body at
-  rest) its error is measured against atol, and Newton's tolerance (1e-10) times T/h then keeps
-  err > 1 however small h gets (flying-spaghetti-3d stopped at h = 1e-8); on the robot arm it took
-  74 182 steps at rtol = 1e-3 against 2258 per step (benchmarks/stepping.md).  A Newton failure
-  is a rejection with h/4.  The steps land exactly on the output times (the frames: `frames`
-  evenly spaced times with t = 0 and t_end).  Below `dt_min` (default 1e-9 t_end) the run ends
-  with exit 3.  The inputs u(t) are read at each step's midpoint: a variable h samples them at
-  other times than a fixed one.
+  (the multipliers, algebraic, left out; the velocities of a body with multipliers or a joint's point,
+  index-2 variables with an undamped (-1)^n mode of the midpoint rule's constraint rows, measured by the
+  displacement h e_v against their configuration's size: `System.field_groups`).  err <= 1 accepts the
+  pair, err > 1 rejects it; the next h is h min(5, max(0.2, 0.9 err^(-1/(p+1)))) (per unit step
+  err^(-1/p); no growth right after a rejection).  Measured on the linear oscillator (two periods, rtol =
+  1e-2 ... 1e-6): per step the global error grows from 2.7 to 68 rtol |x|, per unit step it is 0.24 rtol
+  |x| throughout, at 5 to 22 times the steps.  Per unit step is not the default: where a field starts at
+  zero (a body at rest) its error is measured against atol, and Newton's tolerance (1e-10) times T/h then
+  keeps err > 1 however small h gets (flying-spaghetti-3d stopped at h = 1e-8); on the robot arm it took
+  74 182 steps at rtol = 1e-3 against 2258 per step (benchmarks/stepping.md).  A Newton failure is a
+  rejection with h/4.  The steps land exactly on the output times (the frames: `frames` evenly spaced
+  times with t = 0 and t_end).  Below `dt_min` (default 1e-9 t_end) the run ends with exit 3.  The inputs
+  u(t) are read at each step's midpoint: a variable h samples them at other times than a fixed one.
 
 ``dt=auto`` (``run(problem, "auto", t_end, control=StepControl(adaptive=True, ...))``): an adaptive run
 whose first step is the scene's time scale as its outputs resolve it, the first interval between output
