@@ -54,6 +54,9 @@ LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
+SIMULATOR = "tests/app/test_simulator.py"
+REDUCE = "tests/analysis/test_reduce.py"
+DAMPING = "tests/models/test_damping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -603,7 +606,7 @@ MUTATIONS = [
       [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps"],
       "a step done in sub-steps supplies only its last sub-step's work h y.u"),
     M("inputs-at-the-step-start", "rodfem/analysis/timeloop.py",
-      [("        problem.set_time(t + 0.5 * h)\n", "        problem.set_time(t)\n")],
+      [("    problem.set_time(t + 0.5 * h)\n", "    problem.set_time(t)\n")],
       [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps",
        STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
       "every (sub-)step reads its inputs at its start, not at its midpoint"),
@@ -632,6 +635,72 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- the step interface and the reduced models (issue 29) --------------------------------------
+    M("simulator-restore-keeps-the-history", "rodfem/app/simulator.py",
+      [("        del self.history.rows[state.rows:]\n", "")],
+      [SIMULATOR + "::test_save_restore_and_reset_replay_exactly"],
+      "restore() rolls the state back but the history keeps the rows of the undone steps"),
+    M("simulator-restore-forgets-the-predictor", "rodfem/app/simulator.py",
+      [("        self._previous = None if state.previous is None else state.previous.copy()\n",
+        "        self._previous = None\n")],
+      [SIMULATOR + "::test_save_restore_and_reset_replay_exactly"],
+      "a restored simulator starts Newton from another guess: a replay is not the same run"),
+    M("simulator-split-outputs-summed", "rodfem/app/simulator.py",
+      [("                                     for j in range(p.size)]) / k\n", "                                     for j in range(p.size)])\n")],
+      [SIMULATOR + "::test_a_step_newton_cannot_take_is_split_as_in_the_time_loop"],
+      "a step done in sub-steps returns the sum of their outputs: h u.y is no longer the step's work"),
+    M("reduce-galerkin-instead-of-effort-constraint", "rodfem/analysis/reduce.py",
+      [("    W = np.asarray(full.Q @ V)\n", "    W = V\n")],
+      [REDUCE + "::test_reduced_model_is_port_hamiltonian_and_passive",
+       REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
+      "a Galerkin projection W = V: Q_r = I is no longer the reduced model's energy, C_r != B_r^T"),
+    M("reduce-dissipation-sign", "rodfem/analysis/reduce.py",
+      [("    Jr, Rr, Esym = 0.5 * (M - M.T), 0.5 * (N + N.T), 0.5 * (Er + Er.T)\n",
+        "    Jr, Rr, Esym = 0.5 * (M - M.T), -0.5 * (N + N.T), 0.5 * (Er + Er.T)\n")],
+      [REDUCE + "::test_reduced_model_is_port_hamiltonian_and_passive"],
+      "the reduced dissipation with the wrong sign (an active reduced model)"),
+    M("reduce-one-direction-per-frequency", "rodfem/analysis/reduce.py",
+      [("        b = Vh[k % Vh.shape[0]].conj()\n", "        b = Vh[0].conj()\n")],
+      [REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
+      "a repeated frequency gets the same direction twice (the hanging cable's second pendulum plane is lost)"),
+    # -- Kelvin-Voigt and Rayleigh damping (issue 25) --
+    M("kv-pointwise-strain-rate", "forms/planar_beam.py",
+      [('        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")\n',
+        '        A, r_s, v, w = rotation(step.mid("phi")), step.mid("r").dx(0), step.mid("v"), step.mid("omega")\n'
+        '        Gdot, kdot = A.T * (v.dx(0) - w * S_HAT * r_s), w.dx(0)\n')],
+      [DAMPING + "::test_free_decay_planar_cantilever[kv]"],
+      "the planar dashpots see the pointwise strain rate, not its projection: energy-consistent, but the P1 "
+      "element's shear part locks and over-damps bending"),
+    M("kv-dissipation-not-booked", "forms/planar_beam.py",
+      [("            d = d + ufl.inner(Nv, Gdot) + Mv * kdot\n", "")],
+      [DAMPING + "::test_exact_balance_with_damping[planar-kv-alpha-midpoint]"],
+      "the viscous stresses act, their dissipation is not booked in `dissipated`"),
+    M("rayleigh-alpha-force-missing", "forms/planar_beam.py",
+      [("            F += mass_damping\n", "            pass\n")],
+      [DAMPING + "::test_exact_balance_with_damping[planar-kv-alpha-midpoint]",
+       DAMPING + "::test_rigid_rotation_dissipates_nothing[planar]"],
+      "Rayleigh's -alpha rho v is booked as dissipated but never applied"),
+    M("rod-kv-moments-reversed", "forms/cosserat_rod.py",
+      [("[eN[i] for i in range(3)] + [eM[i] for i in range(3)])", "[eN[i] for i in range(3)] + [eM[2 - i] for i in range(3)])")],
+      [DAMPING + "::test_free_decay_rod_cantilever[kv]"],
+      "the 3D rod's torsion and bending viscosities swapped (balanced, a wrong damping ratio)"),
+    M("rod-kv-not-objective", "forms/cosserat_rod.py",
+      [("        eN, eM = self._strain_rates(step, domain)\n",
+        "        eN, eM = step.mid(\"v\").dx(0), self._strain_rates(step, domain)[1]\n")],
+      [DAMPING + "::test_rigid_rotation_dissipates_nothing[rod]"],
+      "the 3D rod's axial dashpot damps d_s v, which a rigid rotation has too (not objective)"),
+    M("string-alpha-end-mass-missing", "forms/string.py",
+      [("            ends_v = self._lumped(ds, alpha * ufl.inner(v, dv))\n", "            ends_v = None\n")],
+      [DAMPING + "::test_exact_balance_with_damping[string-kv-alpha-discrete-gradient]"],
+      "Rayleigh's mass part forgets the string's end masses (booked, not applied)"),
+    M("kv-negative-viscosity-accepted", "forms/damping.py",
+      [("        if not np.all(np.isfinite(eta)) or np.any(eta < 0):", "        if not np.all(np.isfinite(eta)):")],
+      [DAMPING + "::test_bad_values_are_one_line_parameter_errors"],
+      "a negative viscosity (an energy source) is accepted from the Python API"),
+    M("scene-ignores-tau-kv", "demos/_planar.py",
+      [('degree=p["degree"], damping=kv)', 'degree=p["degree"])')],
+      [DAMPING + "::test_free_decay_planar_cantilever[kv]"],
+      "cantilever-2d accepts --set tau_kv but builds the undamped beam"),
 ]
 
 
