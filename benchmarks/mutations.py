@@ -54,6 +54,7 @@ LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
+ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
 DAMPING = "tests/models/test_damping.py"
@@ -576,15 +577,37 @@ MUTATIONS = [
       "the linear material through the generic quadratic rows: other compiled forms than before"),
 
     # -- adaptive steps (issue 25) ----------------------------------------------------------------------
-    # Not yet caught (issue 25 stays open for it): no test fails a sub-step partway through a split, so
-    # "substeps-from-the-failed-state" (timeloop.py without `problem.restore(snap)` after a failed
-    # sub-step) survives; it comes back here with such a test.
+    M("substeps-from-the-failed-state", "rodfem/analysis/timeloop.py",
+      [("                if snap is not None:\n                    problem.restore(snap)\n", "")],
+      [STEPPING + "::test_a_sub_step_that_fails_partway_through_a_split_restarts_from_x_n"],
+      "a split whose sub-step fails partway is retried in more sub-steps from the failed state, not from x_n"),
+    M("adaptive-snapshot-of-a-stale-state", "rodfem/core/system.py",
+      [('        self._pull(self.X0, "x0")\n        return (self.X0.getArray(readonly=True).copy(),',
+        '        return (self.X0.getArray(readonly=True).copy(),')],
+      [ADAPTIVE + "::test_adaptive_meets_a_fixed_step_reference_on_systems[crane-manoeuvre]"],
+      "a rejected adaptive step restores the state the system was built with (before a scene's static equilibrium)"),
+    M("adaptive-constrained-velocities-unscaled", "rodfem/analysis/stepping.py",
+      [("        diff[scaled] *= h\n", "")],
+      [ADAPTIVE + "::test_adaptive_meets_a_fixed_step_reference_on_systems[four-bar-2d]"],
+      "the joints' (-1)^n velocity mode measured as an error: the mechanism's steps collapse"),
+    M("adaptive-multipliers-in-the-norm", "rodfem/core/system.py",
+      [("            algebraic = set(body.algebraic_fields())\n", "            algebraic = set()\n")],
+      [ADAPTIVE + "::test_the_error_norm_leaves_out_multipliers_and_scales_the_constrained_velocities"],
+      "the bodies' own multipliers (a rigid body's orthonormality) measured as states"),
+    M("servo-start-observed-a-step-later", "rodfem/core/servo.py",
+      [("    points.x0_values, points.times = before\n", "")],
+      ["tests/models/test_servo.py::test_newton_options_before_the_first_run_keep_the_start_residual"],
+      "x_0's constraint residual read against the path at the end of a step of the build-time h"),
+    M("auto-first-step-ignores-the-frames", "rodfem/analysis/stepping.py",
+      [("    return min(later[0] - t, 0.1 * (t_end - t))\n", "    return 0.1 * (t_end - t)\n")],
+      [ADAPTIVE + "::test_dt_auto_starts_from_the_scene_time_scale"],
+      "dt=auto: the first step t_end/10 whatever the frames"),
     M("substep-work-of-the-last-only", "rodfem/analysis/timeloop.py",
       [("its, work, lost = its + s_its, work + w, lost + d", "its, work, lost = its + s_its, w, d")],
       [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps"],
       "a step done in sub-steps supplies only its last sub-step's work h y.u"),
     M("inputs-at-the-step-start", "rodfem/analysis/timeloop.py",
-      [("        problem.set_time(t + 0.5 * h)\n", "        problem.set_time(t)\n")],
+      [("    problem.set_time(t + 0.5 * h)\n", "    problem.set_time(t)\n")],
       [STEPPING + "::test_the_robot_arm_at_the_authors_step_completes_in_sub_steps",
        STEPPING + "::test_adaptive_steps_meet_the_tolerance_of_an_exact_solution"],
       "every (sub-)step reads its inputs at its start, not at its midpoint"),

@@ -342,8 +342,10 @@ class System:
 
     def snapshot(self):
         """What a step changes of the loop's state: x_n and the control laws' states (`restore` puts them back:
-        a rejected step of the step-size control, rodfem/analysis/stepping.py)."""
+        a rejected step of the step-size control, rodfem/analysis/stepping.py).  x_n is read from the bodies, as
+        `predict` does: a change made to a body's x0 after `build` (a scene's static equilibrium) is x_n."""
         self.build()
+        self._pull(self.X0, "x0")
         return (self.X0.getArray(readonly=True).copy(),
                 [list(c.law.state) for c in self.components if getattr(c, "stateful", False)])
 
@@ -358,17 +360,37 @@ class System:
             c.law.state = list(state)
 
     def field_groups(self):
-        """The owned entries of the loop's state vector by body and field (a list of index arrays, the same
-        number on every rank): the step-size control (rodfem/analysis/stepping.py) measures each field against
-        its own size.  The multipliers (constraint forces, algebraic) are left out."""
+        """The owned entries of the loop's state vector by body and field: a list of (indices, paired), the same
+        number on every rank; the step-size control (rodfem/analysis/stepping.py) measures each field against
+        its own size.  The multipliers (constraint forces, algebraic: the joints' and the bodies' fields at
+        t_{n+1} that the step does not carry over, `Body.algebraic_fields`) are left out: their values at
+        the middle and the end of a doubled step are not two approximations of one quantity.
+
+        `paired` (else None) marks a velocity of a constrained body (one with multipliers of its own or a
+        joint's point): the indices of the configuration it moves (`model.kinematics`).  Its end-of-step
+        values are index-2 variables: the constraint rows G(q_m) v_m = 0 hold the midpoint velocity, and
+        v_{n+1} = 2 v_m - v_n carries an undamped (-1)^n component along G^T that one step of h and two of
+        h/2 leave with opposite signs whatever h; the control measures it by the displacement h e_v it
+        makes (the index-2 components scaled by h, Hairer & Wanner, Solving Ordinary Differential
+        Equations II, Springer 1996, sec. VII.8)."""
         self.build()
+        joined = {id(p.body.body) for j in self.joints for p in getattr(j, "points", (j.a, j.b)) if p.body is not None}
         groups = []
         for blk, ref in zip(self.blocks, self.bodies.values()):
             body, owned = ref.body, blk.hi - blk.lo
-            for f in body.space.fields:
-                dofs = body.space.field_dofs(f.name) if body.rigid else body.space.collapse(f.name)[1]
+            algebraic = set(body.algebraic_fields())
+            constrained = bool(algebraic) or id(body) in joined
+            velocity_of = {v: q for q, v in body.model.kinematics.items()} if constrained else {}
+
+            def entries(name):
+                dofs = body.space.field_dofs(name) if body.rigid else body.space.collapse(name)[1]
                 dofs = np.asarray(dofs, dtype=np.int64).ravel()
-                groups.append(blk.lo + dofs[dofs < owned])
+                return blk.lo + dofs[dofs < owned]
+            for f in body.space.fields:
+                if f.name in algebraic:
+                    continue
+                q = velocity_of.get(f.name)
+                groups.append((entries(f.name), None if q is None else entries(q)))
         return groups
 
     def state(self):
@@ -520,7 +542,7 @@ class PointIndex:
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
         self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
-        self.x0_values, self.times = None, (0.0, 0.0, 1.0)
+        self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
         """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
