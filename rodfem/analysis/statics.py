@@ -293,6 +293,10 @@ def refuse_servos(target, what):
     if servos:
         raise ParameterError(f"{what} does not take servo constraints ({', '.join(servos)}): they prescribe a "
                              "motion in time; use run")
+    contacts = [c[3] for c in getattr(target, "contacts", ())]
+    if contacts:
+        raise ParameterError(f"{what} does not take contact between bodies ({', '.join(contacts)}) yet; use run "
+                             "(a damped run reaches the resting state)")
 
 
 class StaticJointRows(JointRows):
