@@ -176,9 +176,13 @@ class Pairing:
         w = np.stack([1.0 - a, a, b - 1.0, -b], axis=1)
         return d, w[:, :, None] * n[:, None, :]
 
-    def force(self, X0, X1):
-        """z D (m, 4, 3): the step's force on the pairs' nodes (the module docstring)."""
+    def force(self, X0, X1, rule="discrete-gradient"):
+        """z D (m, 4, 3): the step's force on the pairs' nodes (the module docstring); the midpoint rule's
+        psi'(d(X_m)) grad d(X_m) with rule 'midpoint'."""
         Xm = 0.5 * (X0 + X1)
+        if rule == "midpoint":
+            d, grad = self.gradient(Xm)
+            return self.law.slope(d, self.R)[:, None, None] * grad
         d0, d1 = self.distance(X0), self.distance(X1)
         _, grad = self.gradient(Xm)
         dX = X1 - X0
@@ -191,15 +195,18 @@ class Pairing:
         z = self.law.quotient(d0, d1, self.R)
         return z[:, None, None] * D
 
-    def jacobian(self, X0, X1):
-        """d(z D)/dX1 (m, 12, 12) by central differences."""
+    def jacobian(self, X0, X1, rest=False, rule="discrete-gradient"):
+        """d(z D)/dX1 (m, 12, 12) by central differences (`rest`: X0 = X1 moves too, the Hessian of V)."""
         m = len(X0)
         step = FD_STEP * max(self.R, 1e-12)
         E = np.eye(12).reshape(12, 4, 3) * step
         plus = (X1[:, None] + E[None]).reshape(-1, 4, 3)
         minus = (X1[:, None] - E[None]).reshape(-1, 4, 3)
+        if rest:
+            diff = (self.force(plus, plus, rule) - self.force(minus, minus, rule)).reshape(m, 12, 12) / (2 * step)
+            return np.transpose(diff, (0, 2, 1))
         base = np.repeat(X0, 12, axis=0)
-        diff = (self.force(base, plus) - self.force(base, minus)).reshape(m, 12, 12) / (2 * step)
+        diff = (self.force(base, plus, rule) - self.force(base, minus, rule)).reshape(m, 12, 12) / (2 * step)
         return np.transpose(diff, (0, 2, 1))    # [pair, row (force component), column (coordinate)]
 
 
@@ -207,8 +214,10 @@ class BodyContacts:
     """The contact laws placed by `System.contact`, as a coupling of rodfem/fem/assembly.py (forces on the
     momentum rows at global indices, computed on rank 0); `step`, `energy`, `observe` for the system."""
 
-    def __init__(self, items, refs, layout, fixed, X):
-        self.comm, self.fixed = layout.comm, fixed
+    def __init__(self, items, refs, layout, fixed, X, rule="discrete-gradient", rest=False):
+        """rule: the system's integrator ('midpoint': the force psi'(d(X_m)) grad d(X_m), not energy-consistent);
+        rest: statics (rodfem/analysis/statics.py) -- the force grad V(x) of the iterate, x_n = x_{n+1}."""
+        self.comm, self.fixed, self.rule, self.rest = layout.comm, fixed, rule, rest
         index = {id(r): k for k, r in enumerate(refs)}
         lines = {}
         for law, a, b, name in items:
@@ -259,6 +268,8 @@ class BodyContacts:
 
     def update(self, X):
         x1 = self.nodes(X)
+        if self.rest:
+            self.x0 = x1
         self._terms = []
         if self.comm.rank == 0:
             for p in self.pairings:
@@ -269,14 +280,14 @@ class BodyContacts:
     def residual(self, X, b):
         for p, pairs, X0, X1 in self._terms:
             rows = p.indices(pairs, "v").ravel()
-            vals = p.force(X0, X1).ravel()
+            vals = p.force(X0, X1, self.rule).ravel()
             keep = np.array([int(r) not in self.fixed for r in rows], dtype=bool)
             b.setValues(rows[keep].astype(PETSc.IntType), np.ascontiguousarray(vals[keep]), addv=PETSc.InsertMode.ADD)
 
     def jacobian(self, X, A):
         for p, pairs, X0, X1 in self._terms:
             rows, cols = p.indices(pairs, "v").reshape(-1, 12), p.indices(pairs, "q").reshape(-1, 12)
-            blocks = p.jacobian(X0, X1)
+            blocks = p.jacobian(X0, X1, self.rest, self.rule)
             for r, c, block in zip(rows, cols, blocks):
                 rk = [k for k, g in enumerate(r) if int(g) not in self.fixed]
                 ck = [k for k, g in enumerate(c) if int(g) not in self.fixed]

@@ -245,7 +245,7 @@ class System:
                        for r in refs]
         self.joint_rows = JointRows(self.points) if (self.joints or self.components) else None
         self.body_contacts = (BodyContacts(self.contacts, refs, self.layout, fixed_dofs(self, self.layout),
-                                           self.layout.create_vector()) if self.contacts else None)
+                                           self.layout.create_vector(), self.integrator) if self.contacts else None)
         parts = [c for c in (self.joint_rows, self.body_contacts) if c is not None]
         self.assembler = BlockAssembler(self.layout, self.blocks,
                                         (parts[0] if len(parts) == 1 else Couplings(parts)) if parts else None)
