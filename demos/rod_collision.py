@@ -62,6 +62,8 @@ parameters = common(n_elements=8, dt=5e-4, t_end=0.06, integrator="discrete-grad
     Parameter("offset_a", 0.0, "m", "where rod b crosses rod a, from a's centre (|offset_a| < L/2)"),
     Parameter("offset_b", 0.0, "m", "where rod a crosses rod b, from b's centre (|offset_b| < L/2)"),
     stiffness("penetration", 1e-3, "m", "penetration of a rigid-body impact (sets the penalty k)"),
+    Parameter("contact", "on", "", "off: no contact (the rods pass through each other; for comparison)",
+              choices=("on", "off")),
 ]
 
 
@@ -121,7 +123,8 @@ def build(p, comm):
     b = system.add("b", rod, L, p["n_elements"],
                    initial=straight((p["offset_a"], 0.0, -z), (0, 1, 0), (0, 0, 1), (0.0, 0.0, 0.5 * V), L))
     # ## The contact: columns touch.N (normal force), touch.Fn_x, _y, _z (on rod a), touch.penetration
-    system.contact(RodContact(contact_stiffness(p), r), a, b, name="touch")
+    if p["contact"] == "on":
+        system.contact(RodContact(contact_stiffness(p), r), a, b, name="touch")
     system.record(momenta(p))
     return system
 

@@ -40,6 +40,8 @@ their forces to the global rows; the energy and the columns are broadcast.
 
 The rows of supported (Dirichlet) nodes are left alone: their reaction takes the force.
 """
+import time
+
 import numpy as np
 from petsc4py import PETSc
 from scipy.spatial import cKDTree
@@ -74,21 +76,14 @@ def segment_spheres(*positions, grow=0.0):
 
 def rigid_projection(dX, Xm):
     """P dX for the configurations Xm (n, m, 3) and increments dX (n, m, 3): dX less its part in the
-    span of the rigid motions at Xm (translations, rotations about the nodes' centroid)."""
-    n, m, _ = Xm.shape
+    span of the rigid motions at Xm, the translation t + rotation w x (x - c) about the nodes' centroid c
+    (orthogonal projection: t = the mean of dX, J w = sum (x - c) x dX with J = sum |x - c|^2 I - (x - c)(x - c)^T,
+    regularized by 1e-14 tr J: nodes on a line have no rotation about it, and neither has dX's part)."""
     rel = Xm - Xm.mean(axis=1, keepdims=True)
-    G = np.zeros((n, m, 3, 6))
-    for k in range(3):
-        e = np.zeros(3)
-        e[k] = 1.0
-        G[:, :, k, k] = 1.0
-        G[:, :, :, 3 + k] = np.cross(e, rel)
-    G = G.reshape(n, 3 * m, 6)
-    U, S, _ = np.linalg.svd(G, full_matrices=False)
-    keep = S > 1e-10 * S[:, :1]
-    U = U * keep[:, None, :]
-    flat = dX.reshape(n, 3 * m)
-    return (flat - np.einsum("nik,nk->ni", U, np.einsum("nik,ni->nk", U, flat))).reshape(dX.shape)
+    r2 = np.einsum("nij,nij->n", rel, rel)
+    J = r2[:, None, None] * np.eye(3) - np.einsum("nia,nib->nab", rel, rel) + 1e-14 * r2[:, None, None] * np.eye(3)
+    w = np.linalg.solve(J, np.cross(rel, dX).sum(axis=1)[:, :, None])[:, :, 0]
+    return dX - dX.mean(axis=1, keepdims=True) - np.cross(w[:, None, :], rel)
 
 
 class Centreline:
@@ -239,6 +234,7 @@ class BodyContacts:
         self.x0 = None
         self._terms = []
         self.work = self.dissipated = 0.0
+        self.seconds = {"search": 0.0, "forces": 0.0, "matrix": 0.0}   # rank 0's time in the contact (benchmarks)
 
     def nodes(self, X):
         """{id(line): node positions (n, 3)} of the state X (rank 0; None elsewhere)."""
@@ -267,6 +263,7 @@ class BodyContacts:
         return pairs[near], X0[near], X1[near]
 
     def update(self, X):
+        start = time.perf_counter()
         x1 = self.nodes(X)
         if self.rest:
             self.x0 = x1
@@ -276,15 +273,19 @@ class BodyContacts:
                 pairs, X0, X1 = self._active(p, self.x0, x1)
                 if len(pairs):
                     self._terms.append((p, pairs, X0, X1))
+        self.seconds["search"] += time.perf_counter() - start
 
     def residual(self, X, b):
+        start = time.perf_counter()
         for p, pairs, X0, X1 in self._terms:
             rows = p.indices(pairs, "v").ravel()
             vals = p.force(X0, X1, self.rule).ravel()
             keep = np.array([int(r) not in self.fixed for r in rows], dtype=bool)
             b.setValues(rows[keep].astype(PETSc.IntType), np.ascontiguousarray(vals[keep]), addv=PETSc.InsertMode.ADD)
+        self.seconds["forces"] += time.perf_counter() - start
 
     def jacobian(self, X, A):
+        start = time.perf_counter()
         for p, pairs, X0, X1 in self._terms:
             rows, cols = p.indices(pairs, "v").reshape(-1, 12), p.indices(pairs, "q").reshape(-1, 12)
             blocks = p.jacobian(X0, X1, self.rest, self.rule)
@@ -294,6 +295,7 @@ class BodyContacts:
                 if rk and ck:
                     A.setValues(r[rk].astype(PETSc.IntType), c[ck].astype(PETSc.IntType),
                                 np.ascontiguousarray(block[np.ix_(rk, ck)]), addv=PETSc.InsertMode.ADD)
+        self.seconds["matrix"] += time.perf_counter() - start
 
     # -- the system's view ------------------------------------------------------------------------
     def _state(self, X):
