@@ -111,6 +111,27 @@ def test_broad_phase_finds_every_overlap_and_stays_linear():
         assert len(close_pairs(centres, radii)) <= 2 * n
 
 
+def test_self_contact_leaves_out_the_rods_own_neighbourhood():
+    """A straight rod of segments much shorter than its radius has no contact with itself (its neighbours
+    within pi r along it are left out), and neither has a half circle of radius 1.05 r (a fold whose ends are
+    2.1 r apart); a coil whose turns are 1.5 r apart touches itself about once per segment."""
+    law = RodContact(1.0, 0.01)
+    for x in (np.outer(np.linspace(0.0, 0.2, 81), [1.0, 0.0, 0.0]),
+              0.0105 * np.column_stack([np.cos(t := np.linspace(0, np.pi, 200)), np.sin(t), 0 * t])):
+        line = _Line()
+        line.s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
+        pair = Pairing(law, line, None, "self")
+        pairs = pair.candidates((x,), None, (0,))
+        assert not np.any(pair.distance(pair.stack(x, None, pairs)) < pair.R) if len(pairs) else True
+    t = np.linspace(0, 4 * np.pi, 400)
+    x = np.column_stack([0.1 * np.cos(t), 0.1 * np.sin(t), 0.015 * t / (2 * np.pi)])
+    line = _Line()
+    line.s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))])
+    pair = Pairing(law, line, None, "self")
+    pairs = pair.candidates((x,), None, (0,))
+    assert np.sum(pair.distance(pair.stack(x, None, pairs)) < pair.R) >= 150
+
+
 # -- two rods crossing at right angles ------------------------------------------------------------
 
 def collide(**over):
