@@ -27,6 +27,8 @@ from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import stiffness_for
 from rodfem.forms.rigid_body import PointMass
 from rodfem.forms.rod_contact import RodContact, closest_points
+from rodfem.forms.string import String
+from rodfem.forms.string_materials import logarithmic
 
 
 def column(result, name):
@@ -173,6 +175,28 @@ def test_stiff_rods_follow_the_rigid_body_impulse_law(offsets):
         errors.append(max(abs(last[k] - last[k + "_rigid"]) / J for k in ("pz_a", "pz_b", "Ly_a", "Lx_b")))
     assert errors[1] <= 3e-4 and errors[0] <= 3e-2
     assert errors[1] <= errors[0] / 10
+
+
+def test_strings_collide_with_the_same_contact():
+    """The same law between two strings (no cross-section: the tubes of radius 0.01 about the P1 centrelines)
+    crossing at right angles: they touch and part with the total momenta constant to round-off and H (with the
+    contact energy) constant to round-off."""
+    rhoA, V, r = 0.3, 0.5, 0.01
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
+    model = String(logarithmic(EA=50.0), rhoA)
+    a = s.add("a", model, 0.5, 10, initial={"r": lambda x: np.vstack([x[0] - 0.25, 0 * x[0] + 0.013, 0 * x[0] + 0.011]),
+                                            "v": lambda x: np.vstack([0 * x[0], 0 * x[0], 0 * x[0] - V / 2])})
+    b = s.add("b", model, 0.5, 10, initial={"r": lambda x: np.vstack([0 * x[0] + 0.017, x[0] - 0.25, 0 * x[0] - 0.011]),
+                                            "v": lambda x: np.vstack([0 * x[0], 0 * x[0], 0 * x[0] + V / 2])})
+    k = 1.5 * (0.25 * rhoA * 0.5) * V**2 / 1e-3**3
+    s.contact(RodContact(k, r), a, b, name="strings")
+    result = run(s, 2e-4, 0.02)
+    assert column(result, "strings.N").max() > 0 and result.rows[-1]["strings.N"] == 0.0
+    H = column(result, "H")
+    assert result.max_balance_error <= 1e-12 * H.max()
+    for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * rhoA * V, key
+    assert result.rows[-1]["p_z"] == pytest.approx(0.0, abs=1e-15)
 
 
 # -- a rod resting across two clamped rods (statics) -------------------------------------------
