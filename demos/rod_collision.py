@@ -21,7 +21,9 @@
 # The penalty k is chosen so that a rigid-body impact would penetrate `penetration`:
 # 1/2 m_eff V^2 = k d^3 / 3 with 1/m_eff the rigid-body law's (below).  A crossing at nodes of both
 # rods (the centres: always a node of the P2 centreline) is counted by four segment pairs, so its
-# penetration is 4^(-1/3) of that.
+# penetration is 4^(-1/3) of that.  On a fine mesh (segments shorter than the contact zone
+# sqrt(2 R d) = sqrt(4 r d)) the segment pairs in the zone share the contact (`zone`): the
+# stiffness does not grow with the number of elements.
 #
 # ## The rigid-body answer (frictionless, elastic)
 #
@@ -124,7 +126,7 @@ def build(p, comm):
                    initial=straight((p["offset_a"], 0.0, -z), (0, 1, 0), (0, 0, 1), (0.0, 0.0, 0.5 * V), L))
     # ## The contact: columns touch.N (normal force), touch.Fn_x, _y, _z (on rod a), touch.penetration
     if p["contact"] == "on":
-        system.contact(RodContact(contact_stiffness(p), r), a, b, name="touch")
+        system.contact(RodContact(contact_stiffness(p), r, zone=np.sqrt(4 * r * p["penetration"])), a, b, name="touch")
     system.record(momenta(p))
     return system
 

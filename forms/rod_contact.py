@@ -14,7 +14,10 @@ the distance of the two segments (clamped closest points: a segment's end counts
 tubes' radii, and the contact's stored energy is the sum over the segment pairs of the cubic penalty
 of forms/contact.py:
 
-    V = sum_ij psi(g_ij),      psi(g) = k/3 <-g>^3      (force k <-g>^2 per contact point).
+    V = sum_ij w_ij psi(g_ij),      psi(g) = k/3 <-g>^3      (force k <-g>^2 per contact point),
+
+with the weights w_ij = min(1, l_i / zone) min(1, l_j / zone) of the segments' lengths l at rest and
+the contact zone `zone` (below; w = 1 without one).
 
 By the envelope theorem its gradient is the normal force -psi'(g) n (n = (x_c - y_c) / d, x_c, y_c
 the closest points) shared by the segments' nodes as (1 - a, a) and (1 - b, b): the forces on the
@@ -29,6 +32,16 @@ What the discretization is and is not:
   stiffness of a point contact is between k and 4 k, and the force a given penetration makes varies
   by that factor along the rod.  V is still one continuous, piecewise smooth energy of the nodes:
   the balance and the momenta hold exactly, and a static contact force equals the load it carries.
+* Segments shorter than the contact zone: two crossing tubes penetrating by d overlap where their
+  centrelines are closer than R, over a zone of radius sqrt(2 R d) about the crossing, and every
+  segment pair in it is in contact -- about (sqrt(2 R d) / l)^2 pairs: without weights a fine mesh
+  makes the contact that many times stiffer.  With zone = sqrt(2 R d) at the penetration d the
+  stiffness is meant for, the weights make V a Riemann sum of the double integral
+  int int psi ds dt / zone^2 on a fine mesh (mesh-independent: for two lines crossing at the angle
+  theta, 2 pi k (R p^4/4 - p^5/5) / (3 zone^2 sin theta) at the penetration p, pi/4 (1 - 4 p/5R) of one
+  point contact at p = d) and the point contact on a coarse one (l >= zone; in between, up to about 4
+  point contacts); a line contact has the stiffness k / max(l, zone) per length.  The weights are
+  constants of the pair: the balance and momenta are unchanged.
 * Nearly parallel segments (line contact, a rod folded onto itself) are a sum of point contacts,
   about one per segment pair; their closest points are not unique when exactly parallel (V has a
   kink there: the force moves from one end of the segment to the other).
@@ -76,10 +89,12 @@ class RodContact:
     radius: the tube radius r_A >= 0 of body a, radius_b that of body b (default r_A);
     exclude: self-contact only, the arc length along the rod within which segment pairs are left out
     (default pi r_A; >= 0);
+    zone: the contact zone's size sqrt(2 R d) at the design penetration d (>= 0; 0: every segment pair
+    weighs 1, see the module docstring);
     name: the history columns' prefix.
     """
 
-    def __init__(self, stiffness, radius, radius_b=None, exclude=None, name="rod_contact"):
+    def __init__(self, stiffness, radius, radius_b=None, exclude=None, zone=0.0, name="rod_contact"):
         if not (np.isfinite(stiffness) and stiffness > 0):
             raise InputError(f"rod contact {name}: stiffness must be a positive number (got {stiffness!r})")
         radius_b = radius if radius_b is None else radius_b
@@ -89,7 +104,10 @@ class RodContact:
         exclude = np.pi * radius if exclude is None else exclude
         if not (np.isfinite(exclude) and exclude >= 0):
             raise InputError(f"rod contact {name}: exclude must be an arc length >= 0 (got {exclude!r})")
+        if not (np.isfinite(zone) and zone >= 0):
+            raise InputError(f"rod contact {name}: zone must be a length >= 0 (got {zone!r})")
         self.k, self.radii, self.exclude, self.name = float(stiffness), (float(radius), float(radius_b)), float(exclude), name
+        self.zone = float(zone)
 
     closest_points = staticmethod(closest_points)
 

@@ -150,6 +150,16 @@ class Pairing:
         i, j = pairs[:, 0], pairs[:, 1]
         return np.stack([nodes_a[i], nodes_a[i + 1], nb[j], nb[j + 1]], axis=1)
 
+    def weights(self, pairs):
+        """The pairs' weights min(1, l_i / zone) min(1, l_j / zone) (l: the segments' lengths along the rods
+        at rest; 1 for every pair without a zone): segments shorter than the contact zone share it."""
+        zone = float(getattr(self.law, "zone", 0.0))
+        if zone <= 0.0 or not len(pairs):
+            return np.ones(len(pairs))
+        la = np.diff(self.a.s)[pairs[:, 0]]
+        lb = np.diff((self.a if self.self_contact else self.b).s)[pairs[:, 1]]
+        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)
+
     def indices(self, pairs, which):
         """Global indices (m, 4, 3) of the pairs' nodes' q or v dofs."""
         A = getattr(self.a, which)
@@ -260,7 +270,7 @@ class BodyContacts:
         X0 = p.stack(x0[a], None if b is None else x0[b], pairs)
         X1 = p.stack(x1[a], None if b is None else x1[b], pairs)
         near = np.minimum.reduce([p.distance(X) for X in (X0, X1, 0.5 * (X0 + X1))]) < p.R if len(pairs) else []
-        return pairs[near], X0[near], X1[near]
+        return pairs[near], X0[near], X1[near], p.weights(pairs[near])
 
     def update(self, X):
         start = time.perf_counter()
@@ -270,25 +280,25 @@ class BodyContacts:
         self._terms = []
         if self.comm.rank == 0:
             for p in self.pairings:
-                pairs, X0, X1 = self._active(p, self.x0, x1)
+                pairs, X0, X1, w = self._active(p, self.x0, x1)
                 if len(pairs):
-                    self._terms.append((p, pairs, X0, X1))
+                    self._terms.append((p, pairs, X0, X1, w))
         self.seconds["search"] += time.perf_counter() - start
 
     def residual(self, X, b):
         start = time.perf_counter()
-        for p, pairs, X0, X1 in self._terms:
+        for p, pairs, X0, X1, w in self._terms:
             rows = p.indices(pairs, "v").ravel()
-            vals = p.force(X0, X1, self.rule).ravel()
+            vals = (w[:, None, None] * p.force(X0, X1, self.rule)).ravel()
             keep = np.array([int(r) not in self.fixed for r in rows], dtype=bool)
             b.setValues(rows[keep].astype(PETSc.IntType), np.ascontiguousarray(vals[keep]), addv=PETSc.InsertMode.ADD)
         self.seconds["forces"] += time.perf_counter() - start
 
     def jacobian(self, X, A):
         start = time.perf_counter()
-        for p, pairs, X0, X1 in self._terms:
+        for p, pairs, X0, X1, w in self._terms:
             rows, cols = p.indices(pairs, "v").reshape(-1, 12), p.indices(pairs, "q").reshape(-1, 12)
-            blocks = p.jacobian(X0, X1, self.rest, self.rule)
+            blocks = w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule)
             for r, c, block in zip(rows, cols, blocks):
                 rk = [k for k, g in enumerate(r) if int(g) not in self.fixed]
                 ck = [k for k, g in enumerate(c) if int(g) not in self.fixed]
@@ -299,7 +309,7 @@ class BodyContacts:
 
     # -- the system's view ------------------------------------------------------------------------
     def _state(self, X):
-        """Per pairing: (pairs, d, grad d, X) of the segment pairs in contact at the state X (rank 0)."""
+        """Per pairing: (pairs, d, grad d, weights) of the segment pairs in contact at the state X (rank 0)."""
         x = self.nodes(X)
         out = []
         if self.comm.rank == 0:
@@ -309,27 +319,27 @@ class BodyContacts:
                 Xs = p.stack(x[a], None if b is None else x[b], pairs)
                 d, grad = p.gradient(Xs) if len(pairs) else (np.zeros(0), np.zeros((0, 4, 3)))
                 near = d < p.R
-                out.append((pairs[near], d[near], grad[near]))
+                out.append((pairs[near], d[near], grad[near], p.weights(pairs[near])))
         return out
 
     def energy(self, X) -> float:
         """The contacts' stored energy at the state X (collective, the same on every rank)."""
         states = self._state(X)
-        V = sum(float(np.sum(p.law.energy(d, p.R))) for p, (_, d, _) in zip(self.pairings, states)) \
+        V = sum(float(np.sum(w * p.law.energy(d, p.R))) for p, (_, d, _, w) in zip(self.pairings, states)) \
             if self.comm.rank == 0 else 0.0
         return self.comm.bcast(V, root=0)
 
     def observe(self, X) -> dict:
         """name.energy, name.N (the sum of the pairs' normal forces -psi'), name.Fn_x, _y, _z (the contact
         force on body a; zero for self-contact), name.penetration (the largest <R - d>), name.active (the
-        number of segment pairs in contact) of the state X (collective)."""
+        number of segment pairs in contact) of the state X (collective); the pairs weighted as in V."""
         states = self._state(X)
         obs = {}
         if self.comm.rank == 0:
-            for p, (pairs, d, grad) in zip(self.pairings, states):
-                slope = p.law.slope(d, p.R)
+            for p, (pairs, d, grad, w) in zip(self.pairings, states):
+                slope = w * p.law.slope(d, p.R)
                 on_a = -np.einsum("n,nk->k", slope, grad[:, 0] + grad[:, 1]) if not p.self_contact else np.zeros(3)
-                obs[f"{p.name}.energy"] = float(np.sum(p.law.energy(d, p.R)))
+                obs[f"{p.name}.energy"] = float(np.sum(w * p.law.energy(d, p.R)))
                 obs[f"{p.name}.N"] = float(-np.sum(slope))
                 for c, f in zip("xyz", on_a):
                     obs[f"{p.name}.Fn_{c}"] = float(f)
