@@ -164,6 +164,8 @@ class Body:
                 obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             obs.update(self.momentum_forms(X))
+        if hasattr(self.model, "columns"):   # a model's own columns (e.g. entropy, mean temperature)
+            obs.update(self.model.columns(X, self.dx, self.ds, self.length))
         for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
             if hasattr(load, "observables"):
                 obs.update(load.observables(X, self.dx, self.ds))
