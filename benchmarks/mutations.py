@@ -52,6 +52,7 @@ CONTROL = "tests/models/test_control.py"
 JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a_spinning_beam_and_a_body_holds_its_definition"
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
+ROD_CONTACT = "tests/models/test_rod_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -545,6 +546,51 @@ MUTATIONS = [
         "            return k / 2.0 * ufl.conditional(ufl.lt(g, 0.0), -g, 0.0) ** 2")],
       [f"{CONTACT}::test_rolling_rod_energies_follow_the_analytic_solution[rolling]"],
       "the distributed penalty k/2 <-g>^2 instead of k/3 <-g>^3: the rod sinks to the wrong depth"),
+
+    # -- contact between rods and self-contact (issue 24) ------------------------------------------
+    M("rodcontact-no-dg-correction", "rodfem/core/bodycontact.py",
+      [("        c = np.where(use, bracket / np.where(use, nP2, 1.0), 0.0)", "        c = 0.0 * bracket")],
+      [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
+       f"{ROD_CONTACT}::test_collision_keeps_momentum_and_energy[discrete-gradient]"],
+      "the rod contact's force without the discrete gradient's correction: grad d(x_m) times the quotient"),
+    M("rodcontact-unprojected-correction", "rodfem/core/bodycontact.py",
+      [("        P = rigid_projection(dX, Xm)", "        P = dX")],
+      [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
+       f"{ROD_CONTACT}::test_collision_keeps_momentum_and_energy[discrete-gradient]"],
+      "Gonzalez's correction along dX itself (not projected off the rigid motions): energy exact, momenta not"),
+    M("rodcontact-quotient", "forms/rod_contact.py",
+      [("-self.k / 3.0 * (p0 * p0 + p0 * p1 + p1 * p1)", "-self.k / 3.0 * (p0 * p0 + 2 * p0 * p1) ")],
+      [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
+       f"{ROD_CONTACT}::test_collision_keeps_momentum_and_energy[discrete-gradient]"],
+      "a wrong difference quotient of the cubic penalty while the contact lasts through the step"),
+    M("rodcontact-unclamped-closest-point", "forms/rod_contact.py",
+      [("    b = np.clip(b, 0.0, 1.0)\n", "")],
+      [f"{ROD_CONTACT}::test_segment_distance_against_a_brute_force_search"],
+      "the closest point on the second segment left unclamped (a point of its line beyond the segment)"),
+    M("rodcontact-broad-phase-radius", "rodfem/core/bodycontact.py",
+      [("    pairs = tree.query_pairs(2.0 * float(np.max(radii)), output_type=\"ndarray\")",
+        "    pairs = tree.query_pairs(float(np.max(radii)), output_type=\"ndarray\")")],
+      [f"{ROD_CONTACT}::test_broad_phase_finds_every_overlap_and_stays_linear"],
+      "the k-d tree searched within max r instead of 2 max r: overlapping spheres missed"),
+    M("rodcontact-no-self-exclusion", "rodfem/core/bodycontact.py",
+      [("            return pairs[(sep >= self.law.exclude) & (pairs[:, 1] > pairs[:, 0] + 1)]",
+        "            return pairs[(pairs[:, 1] > pairs[:, 0] + 1)]")],
+      [f"{ROD_CONTACT}::test_self_contact_leaves_out_the_rods_own_neighbourhood"],
+      "self-contact without the exclusion length: a straight rod of short segments touches itself"),
+    M("rodcontact-energy-not-in-H", "rodfem/core/system.py",
+      [("            stored += self.body_contacts.energy(self.X1)", "            stored += 0.0")],
+      [f"{ROD_CONTACT}::test_collision_keeps_momentum_and_energy[discrete-gradient]",
+       f"{ROD_CONTACT}::test_self_contact_stops_a_hairpin_from_passing_through_itself"],
+      "the rods' contact energy left out of H"),
+    M("rodcontact-zone-unweighted", "rodfem/core/bodycontact.py",
+      [("        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)", "        return np.ones(len(pairs))")],
+      [f"{ROD_CONTACT}::test_segment_pairs_sharing_the_contact_zone_converge_to_the_double_integral"],
+      "segments shorter than the contact zone not sharing it: the contact stiffens with the mesh"),
+    M("rodcontact-one-sided-force", "rodfem/core/bodycontact.py",
+      [("        w = np.stack([1.0 - a, a, b - 1.0, -b], axis=1)", "        w = np.stack([1.0 - a, a, 0.0 * b, 0.0 * b], axis=1)")],
+      [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
+       f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
+      "the contact force on one body only (no reaction on the other)"),
 
     # -- 3D rod materials (issue 31) --
     M("rod-material-dg-dropped", "forms/cosserat_rod.py",
