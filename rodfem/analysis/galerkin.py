@@ -58,6 +58,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from rodfem.errors import NewtonFailure, ParameterError
 from rodfem.nls.newton import DEFAULTS, Solve
@@ -156,11 +157,31 @@ class Basis:
         return self.x_ref + self.V @ xi
 
 
-def pod_basis(snapshots, rank, lay: Layout) -> Basis:
+def strain_images(problem, Phi, lay: Layout, x):
+    """The energy variables' increments that the configuration modes Phi cause, linearized at the state x: the
+    energy rows' solution de = -J_ee^{-1} J_ev phi_j for the velocity phi_j (J = dF/dx_{n+1} of the step at x;
+    scaled to unit norm).  A configuration mode whose increments the energy basis misses would have no stiffness."""
+    A = problem.assembler.A
+    X = problem.assembler.vector
+    X.getArray()[:] = x
+    problem.assembler.update(X)
+    problem.assembler.jacobian(X, A)
+    indptr, cols, vals = A.getValuesCSR()
+    J = sp.csr_matrix((vals, cols, indptr), shape=A.getSize())
+    Jee = J[lay.e][:, lay.e].tocsc()
+    rhs = -(J[lay.e][:, lay.v] @ Phi)
+    de = np.asarray(spla.spsolve(Jee, rhs)).reshape(len(lay.e), -1)
+    return de / np.maximum(np.linalg.norm(de, axis=0), 1e-300)
+
+
+def pod_basis(snapshots, rank, lay: Layout, problem=None, energy_rank=None) -> Basis:
     """The basis of the module docstring from `snapshots` (full states, one per column, the first the initial
-    state) with `rank` (>= 1) modes per block (configuration and energy)."""
+    state) with `rank` (>= 1) configuration modes and `energy_rank` (default `rank`) energy POD modes; with
+    `problem`, the energy basis also holds the strain images of the configuration modes at the first snapshot
+    (`strain_images`)."""
     if not (isinstance(rank, (int, np.integer)) and rank >= 1):
         raise ParameterError(f"--order must be an integer >= 1 (modes per block; got {rank!r})")
+    energy_rank = rank if energy_rank is None else energy_rank
     X = np.asarray(snapshots, dtype=float)
     x0 = X[:, 0]
 
@@ -169,7 +190,10 @@ def pod_basis(snapshots, rank, lay: Layout) -> Basis:
         na, nb = np.linalg.norm(dev), np.linalg.norm(raw)
         return np.hstack([dev, raw * (na / nb if nb > 0 and na > 0 else 1.0)])
     Phi, s_q = pod(block(lay.q, lay.v), rank, lay.field_slices["q"])
-    Psi, s_e = pod(block(lay.e, lay.n), rank, lay.field_slices["e"])
+    Psi, s_e = pod(block(lay.e, lay.n), energy_rank, lay.field_slices["e"])
+    if problem is not None:   # the strain images first, then the POD modes they do not span
+        U, sv, _ = np.linalg.svd(np.hstack([strain_images(problem, Phi, lay, x0), Psi]), full_matrices=False)
+        Psi = U[:, :int(np.sum(sv > 1e-8 * sv[0]))]
     n, rq, re = X.shape[0], Phi.shape[1], Psi.shape[1]
     V = np.zeros((n, 2 * rq + 2 * re))
     V[lay.q, :rq] = Phi

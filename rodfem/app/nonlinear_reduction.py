@@ -80,7 +80,7 @@ def run_nonlinear_reduce(scene, overrides=None, test=None, orders=(4, 8, 16), ou
                               "full_balance_relative": float(res.max_balance_error / max(np.abs(res.column("H")).max(), 1e-300))}
     X_train = data["train"][2]
     for r in orders:
-        basis = pod_basis(X_train, r, lay)
+        basis = pod_basis(X_train, r, lay, problem=data["train"][0])
         entry = {"modes_per_block": basis.ranks, "reduced_unknowns": basis.order}
         for name, (problem, res, X, q) in data.items():
             t0 = time.perf_counter()

@@ -44,7 +44,7 @@ def test_reduced_energy_balance_is_exact(rule, hooke):
     else:
         cases, lay = trained({"material": "log-axial", "integrator": "discrete-gradient"})
     problem, res, X, p = cases["train"]
-    basis = pod_basis(X, 3, lay)
+    basis = pod_basis(X, 3, lay, problem)
     red, S, _ = reduced_run(problem, basis, p["dt"], p["t_end"], X[:, 0])
     e = errors(res, X, red, S, lay)
     assert e["balance_relative"] <= 1e-12
@@ -59,7 +59,7 @@ def test_error_falls_with_rank_on_training_and_test_inputs(hooke):
     X = cases["train"][2]
     found = {}
     for r in (2, 4, 8):
-        basis = pod_basis(X, r, lay)
+        basis = pod_basis(X, r, lay, cases["train"][0])
         for name, (problem, res, Xc, p) in cases.items():
             red, S, _ = reduced_run(problem, basis, p["dt"], p["t_end"], Xc[:, 0])
             found[(name, r)] = errors(res, Xc, red, S, lay)
@@ -68,15 +68,15 @@ def test_error_falls_with_rank_on_training_and_test_inputs(hooke):
         tip = [found[(name, r)]["tip_y"] for r in (2, 4, 8)]
         assert c[0] > c[1] > c[2] and tip[0] > tip[2], (name, c, tip)
         assert all(found[(name, r)]["balance_relative"] <= 1e-12 for r in (2, 4, 8))
-    assert found[("train", 8)]["configuration"] < 1e-2
-    assert found[("test", 8)]["configuration"] < 2e-2
+    assert found[("train", 8)]["configuration"] < 5e-3
+    assert found[("test", 8)]["configuration"] < 1e-2
 
 
 def test_full_rank_reproduces_the_full_model(hooke):
     """With every POD mode the reduced model is the full model on the training run (to Newton's tolerance)."""
     cases, lay = hooke
     problem, res, X, p = cases["train"]
-    basis = pod_basis(X, 10_000, lay)
+    basis = pod_basis(X, 10_000, lay, problem)
     red, S, _ = reduced_run(problem, basis, p["dt"], p["t_end"], X[:, 0])
     assert errors(res, X, red, S, lay)["configuration"] < 1e-8
 
@@ -88,7 +88,7 @@ def test_no_energy_created_without_input(hooke):
     _, _, X, p = cases["train"]
     scene, q = resolve("cantilever-2d", {**BASE, "t_load": 0.0})
     problem = build(scene, q, MPI.COMM_WORLD)
-    rom = ReducedSystem(problem, pod_basis(X, 4, lay), start=X[:, -1])
+    rom = ReducedSystem(problem, pod_basis(X, 4, lay, problem), start=X[:, -1])
     res = run(rom, p["dt"], 0.05)
     H = res.column("H")
     assert H[0] > 1.0 and np.max(np.abs(H - H[0])) <= 1e-12 * H[0]
