@@ -224,7 +224,8 @@ class ReducedSystem:
         if basis.V.shape[0] != n:
             raise ParameterError(f"nonlinear reduction: the basis has {basis.V.shape[0]} rows, the problem {n} dofs "
                                  "(another mesh or degree than the training run)")
-        self.V = basis.V
+        self.V = sp.csr_matrix(basis.V)     # block-sparse: each column lives in one group
+        self.Vt = self.V.T.tocsr()
         x = np.asarray(start if start is not None else problem.snapshot()[0], dtype=float)
         self.xi0 = basis.coordinates(x)
         self.initial_projection_error = float(np.linalg.norm(basis.full(self.xi0) - x) / max(np.linalg.norm(x), 1e-300))
@@ -265,7 +266,7 @@ class ReducedSystem:
         self._set_x1(xi)
         self.assembler.residual(self.assembler.vector, self._b)
         t1 = time.perf_counter()
-        r = self.V.T @ self._b.getArray(readonly=True)
+        r = self.Vt @ self._b.getArray(readonly=True)
         self.timings["assemble_F"] += t1 - t0
         self.timings["project"] += time.perf_counter() - t1
         return r
@@ -277,7 +278,7 @@ class ReducedSystem:
         t1 = time.perf_counter()
         indptr, cols, vals = A.getValuesCSR()
         J = sp.csr_matrix((vals, cols, indptr), shape=A.getSize())
-        Jr = self.V.T @ (J @ self.V)
+        Jr = (self.Vt @ (J @ self.V)).toarray()
         self.timings["assemble_J"] += t1 - t0
         self.timings["project"] += time.perf_counter() - t1
         return Jr
