@@ -43,7 +43,15 @@ the configuration block of [q_k - q_ref, s v_k], the energy block of [e_k - e_re
 scale the second set to the Frobenius norm of the first), each field of a block weighted by the
 inverse of its snapshots' RMS (so that metres, radians and strains weigh alike), then orthonormalized.
 x_ref is the first snapshot with its velocities and efforts set to zero (the Dirichlet values stay
-in x_ref: the snapshots' deviations, hence the bases, vanish there).
+in x_ref: the snapshots' deviations, hence the bases, vanish there; fixed supports only).
+
+The energy basis also holds the strain images of the configuration modes (`strain_images`: the energy
+variables' increments de_j that the velocity phi_j causes in one step, linearized at x_ref), orthonormalized
+with its POD modes.  Without them a configuration mode whose strains the energy basis misses has no
+stiffness, and the load drives it freely: on the cantilever at large deflection the POD-only basis with
+as many energy as configuration modes had errors of 1.3 (r = 4) and, with half as many, 8 to 95 times the
+motion; with the images the error falls with r (benchmarks/nonlinear_reduce.md).  So a block of r
+configuration modes gives 2 r unknowns (a, b) and the energy block 2 (r_e + r) (c, m), r_e = r POD modes.
 
 What is not reduced: the assembly.  F and dF/dx are assembled at full order every Newton
 iteration (no hyper-reduction), so a reduced step costs a full step's assembly plus the
