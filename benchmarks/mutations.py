@@ -58,6 +58,7 @@ THERMO = "tests/models/test_thermoelastic_string.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
+GALERKIN = "tests/analysis/test_galerkin.py"
 DAMPING = "tests/models/test_damping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
@@ -754,6 +755,24 @@ MUTATIONS = [
       [("        b = Vh[k % Vh.shape[0]].conj()\n", "        b = Vh[0].conj()\n")],
       [REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
       "a repeated frequency gets the same direction twice (the hanging cable's second pendulum plane is lost)"),
+    M("galerkin-effort-basis-not-the-strain-basis", "rodfem/analysis/galerkin.py",
+      [("    V[lay.n, 2 * rq + re:] = Psi\n", "    V[lay.n, 2 * rq + re:] = Psi[::-1]\n")],
+      [GALERKIN + "::test_reduced_energy_balance_is_exact"],
+      "the effort fields reduced with another basis than the strains: the projected effort is no longer a "
+      "test vector of the strain rows, the reduced energy balance breaks"),
+    M("galerkin-no-strain-images", "rodfem/analysis/galerkin.py",
+      [("    if problem is not None:   # the strain images first", "    if False:   # the strain images first")],
+      [GALERKIN + "::test_no_configuration_mode_without_stiffness"],
+      "the energy basis without the configuration modes' strain images: stiffness-free modes"),
+    M("galerkin-one-newton-iteration", "rodfem/analysis/galerkin.py",
+      [("            if norm <= ATOL or norm <= RTOL * r0 or small:", "            if it >= 1 or norm <= ATOL or small:")],
+      [GALERKIN + "::test_reduced_energy_balance_is_exact"],
+      "the reduced Newton stops after one iteration: the Galerkin residual is not zero, nor the balance exact"),
+    M("galerkin-accept-keeps-the-old-state", "rodfem/analysis/galerkin.py",
+      [("        self.xi0 = self.xi1.copy()\n        self._push_x0()\n        return previous",
+        "        self.xi0 = self.xi1.copy()\n        return previous")],
+      [GALERKIN + "::test_full_rank_reproduces_the_full_model"],
+      "accept() does not put x_{n+1} into the problem's x_n: every step starts from the initial state"),
     # -- Kelvin-Voigt and Rayleigh damping (issue 25) --
     M("kv-pointwise-strain-rate", "forms/planar_beam.py",
       [('        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")\n',

@@ -170,10 +170,8 @@ def strain_images(problem, Phi, lay: Layout, x):
     energy rows' solution de = -J_ee^{-1} J_ev phi_j for the velocity phi_j (J = dF/dx_{n+1} of the step at x;
     scaled to unit norm).  A configuration mode whose increments the energy basis misses would have no stiffness."""
     A = problem.assembler.A
-    X = problem.assembler.vector
-    X.getArray()[:] = x
-    problem.assembler.update(X)
-    problem.assembler.jacobian(X, A)
+    problem.restore((np.asarray(x, dtype=float), []))     # x_n = x_{n+1} = x (the Jacobian reads both)
+    problem.assembler.jacobian(problem.assembler.vector, A)
     indptr, cols, vals = A.getValuesCSR()
     J = sp.csr_matrix((vals, cols, indptr), shape=A.getSize())
     Jee = J[lay.e][:, lay.e].tocsc()

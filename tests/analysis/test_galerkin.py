@@ -72,6 +72,19 @@ def test_error_falls_with_rank_on_training_and_test_inputs(hooke):
     assert found[("test", 8)]["configuration"] < 1e-2
 
 
+def test_no_configuration_mode_without_stiffness(hooke):
+    """With fewer energy POD modes (2) than configuration modes (6, 8), the strain images of the configuration
+    modes in the energy basis keep every mode stiff: the error stays below 0.2 (without them a mode whose strains
+    the basis misses has no stiffness, and the load drives it: errors of 5 and 10 times the motion)."""
+    cases, lay = hooke
+    problem, res, X, p = cases["train"]
+    for r in (6, 8):
+        basis = pod_basis(X, r, lay, problem, energy_rank=2)
+        assert basis.ranks["energy"] == r + 2
+        red, S, _ = reduced_run(problem, basis, p["dt"], p["t_end"], X[:, 0])
+        assert errors(res, X, red, S, lay)["configuration"] < 0.2
+
+
 def test_full_rank_reproduces_the_full_model(hooke):
     """With every POD mode the reduced model is the full model on the training run (to Newton's tolerance)."""
     cases, lay = hooke
