@@ -230,8 +230,8 @@ class ReducedSystem:
         if basis.V.shape[0] != n:
             raise ParameterError(f"nonlinear reduction: the basis has {basis.V.shape[0]} rows, the problem {n} dofs "
                                  "(another mesh or degree than the training run)")
-        self.V = sp.csr_matrix(basis.V)     # block-sparse: each column lives in one group
-        self.Vt = self.V.T.tocsr()
+        self.V = basis.V
+        self.Vt = sp.csr_matrix(basis.V.T)    # block-sparse: each column lives in one group (V^T (J V): 2x faster)
         x = np.asarray(start if start is not None else problem.snapshot()[0], dtype=float)
         self.xi0 = basis.coordinates(x)
         self.initial_projection_error = float(np.linalg.norm(basis.full(self.xi0) - x) / max(np.linalg.norm(x), 1e-300))
@@ -284,7 +284,7 @@ class ReducedSystem:
         t1 = time.perf_counter()
         indptr, cols, vals = A.getValuesCSR()
         J = sp.csr_matrix((vals, cols, indptr), shape=A.getSize())
-        Jr = (self.Vt @ (J @ self.V)).toarray()
+        Jr = self.Vt @ (J @ self.V)
         self.timings["assemble_J"] += t1 - t0
         self.timings["project"] += time.perf_counter() - t1
         return Jr
