@@ -124,3 +124,33 @@ def test_bad_input():
     scene, p = resolve("cantilever-2d", {**BASE, "n_elements": 5})
     with pytest.raises(ParameterError, match="rows"):
         ReducedSystem(build(scene, p, MPI.COMM_WORLD), pod_basis(X, 2, lay))
+
+
+def test_cli_trains_and_checks(tmp_path, rodfem):
+    """`rodfem reduce --nonlinear` prints and writes, per order and input, the errors, the balance and the
+    timings; they are those of the Python API (the same runs)."""
+    out = tmp_path / "nl"
+    sets = [a for k, v in BASE.items() for a in ("--set", f"{k}={v}")]
+    p = rodfem("reduce", "cantilever-2d", "--nonlinear", "--order", "2", "4", *sets, "--test", "fy=-50",
+               "--out", out)
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert "train" in p.stdout and "test" in p.stdout
+    import json
+    info = json.loads((out / "nonlinear_reduce.json").read_text())
+    assert set(info["orders"]) == {"2", "4"} and info["test_parameters"] == {"fy": -50.0}
+    for r in ("2", "4"):
+        for name in ("train", "test"):
+            e = info["orders"][r][name]
+            assert e["errors"]["balance_relative"] <= 1e-12 and e["speed_up"] > 0
+    assert info["orders"]["4"]["train"]["errors"]["configuration"] < info["orders"]["2"]["train"]["errors"]["configuration"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--nonlinear", "--order", "0"], "--order must be integers >= 1"),
+    (["--nonlinear", "--set", "degree=1"], "efforts as fields"),
+    (["--test", "fy=-50"], "--test goes with --nonlinear"),
+])
+def test_cli_bad_input_is_one_line(tmp_path, rodfem, args, message):
+    p = rodfem("reduce", "cantilever-2d", "--set", "n_elements=4", "--set", "t_end=0.01", "--set", "degree=2", *args,
+               "--out", tmp_path / "x")
+    assert p.returncode == 2 and message in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
