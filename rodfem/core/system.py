@@ -31,6 +31,7 @@ from petsc4py import PETSc
 
 from rodfem.core.body import Body
 from rodfem.core.components import Law
+from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
@@ -520,6 +521,13 @@ class PointIndex:
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
         self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
+        # the joints' multiplier columns, in the joints' order: names and positions in the gathered values
+        self.lam_names = [f"{j.name}.{getattr(j, 'multiplier', 'lambda')}{i + 1}" for j in self.joints
+                          for i in range(len(j.lam_at))]
+        self.lam_at = np.array([k for j in self.joints for k in j.lam_at], dtype=np.int64)
+        # the plain joints' terms as stacked arrays (rodfem/core/joint_batch.py)
+        plain = [j for j in self.joints if batchable(j)]
+        self.batch = JointBatch(plain, self.fixed) if plain else None
         self.x0_values, self.times = None, (0.0, 0.0, 1.0)
 
     def values(self, X):
@@ -588,11 +596,11 @@ class PointIndex:
         obs = {}
         if self.comm.rank == 0:
             t1 = self.times[1]
-            worst = 0.0
+            worst = self.batch.worst_gap(vals, t1) if self.batch is not None else 0.0
             for j in self.joints:
-                worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
-                for i, lam in enumerate(vals[j.lam_at]):
-                    obs[f"{j.name}.{getattr(j, 'multiplier', 'lambda')}{i + 1}"] = float(lam)
+                if self.batch is None or not batchable(j):
+                    worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
+            obs.update(zip(self.lam_names, vals[self.lam_at].tolist()))   # every joint's multipliers
             if self.joints:
                 obs["constraint_residual"] = worst
             for c in self.components:
@@ -617,14 +625,16 @@ class JointRows:
     COMPONENT_PAIRS = (("v", "q"), ("v", "v"))                                         # and a component
 
     def __init__(self, points):
-        self.points, self.joints, self.comm = points, points.joints, points.comm
+        self.points, self.comm = points, points.comm
+        self.batch = points.batch   # the plain joints, stacked (rodfem/core/joint_batch.py)
+        self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
-        self.work = self.dissipated = 0.0
+        self.work = self.dissipated = self._batch_work = 0.0
         self._terms = []
 
     def entries(self):
         """(rows, cols) of every entry the joints can fill (the same on every rank)."""
-        out = []
+        out = self.batch.entries() if self.batch is not None else []
         for j in self.joints:
             v, q = j.v_index[j.rows], j.q_index[j.qcols]
             lam = j.lam_index
@@ -644,10 +654,12 @@ class JointRows:
     def update(self, X):
         """The joints' terms at the iterate X (rank 0; nothing elsewhere)."""
         vals = self.points.values(X)
-        self._terms = []
+        self._terms, self._batch_work = [], 0.0
         if self.comm.rank == 0:
             v0 = self.points.x0_values
             t0, t1, h = self.points.times
+            if self.batch is not None:
+                self._batch_work = self.batch.update(v0, vals, h, t0, t1)
             for j in self.joints:
                 self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1), 0.0))
             for c in self.components:
@@ -661,7 +673,9 @@ class JointRows:
         return r_v, r_lam, (("v", "q", drv_dq), ("v", "lam", drv_dl), ("lam", "q", drl_dq), ("lam", "v", drl_dv)), work
 
     def residual(self, X, b):
-        work = lost = 0.0
+        work, lost = self._batch_work, 0.0
+        if self.batch is not None and self.comm.rank == 0:
+            self.batch.residual(b)
         for j, r_v, r_lam, _, w, d in self._terms:
             b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
                         addv=PETSc.InsertMode.ADD)
@@ -672,6 +686,8 @@ class JointRows:
         self.work, self.dissipated = self.comm.bcast((work, lost), root=0)
 
     def jacobian(self, X, A):
+        if self.batch is not None and self.comm.rank == 0:
+            self.batch.jacobian(A)
         for j, _, _, blocks, _, _ in self._terms:
             index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(len(j.lam_index))))}
             for rk, ck, block in blocks:
