@@ -626,7 +626,9 @@ class JointRows:
 
     def __init__(self, points):
         self.points, self.comm = points, points.comm
-        self.batch = points.batch   # the plain joints, stacked (rodfem/core/joint_batch.py)
+        # the plain joints, stacked (rodfem/core/joint_batch.py); a subclass with terms of its own
+        # (rodfem/analysis/statics.py: the joints at rest) keeps the joint-by-joint loop
+        self.batch = points.batch if type(self).update is JointRows.update else None
         self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
         self.work = self.dissipated = self._batch_work = 0.0

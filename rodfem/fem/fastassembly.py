@@ -73,7 +73,8 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff)
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff,
+                    const int32_t* cbody, int kstride)
 {
   kernel_t kernel = (kernel_t)kernel_address;
   double* Ae = malloc(sizeof(double) * nd * nd);
@@ -94,7 +95,8 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
       for (int d = 0; d < 3; ++d)
         coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
     memset(Ae, 0, sizeof(double) * nd * nd);
-    kernel(Ae, coeffs + (size_t)e * cstride, consts, coords, facets ? facets + e : NULL, &perm);
+    kernel(Ae, coeffs + (size_t)e * cstride, cbody ? consts + (size_t)cbody[e] * kstride : consts, coords,
+           facets ? facets + e : NULL, &perm);
     /* columns of this cell: owned ones by local index, ghost ones by their off-diagonal column */
     int nD = 0, nO = 0;
     for (int j = 0; j < nd; ++j) {
@@ -186,6 +188,49 @@ void rodfem_set(double* a, int n, const int64_t* positions, double value)
 {
   for (int k = 0; k < n; ++k) a[positions[k]] = value;
 }
+
+/* b[dofs of the entity] += element vector, for `n` entities of many bodies (rodfem/fem/batch.py):
+   entity e's coefficients at coeffs + e * cstride, its constants at consts + cbody[e] * kstride */
+void rodfem_batch_vector(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* b)
+{
+  kernel_t kernel = (kernel_t)kernel_address;
+  double be[512];
+  double coords[3 * 64];
+  uint8_t perm = 0;
+  for (int e = 0; e < n; ++e) {
+    int32_t c = cells[e];
+    for (int k = 0; k < nx; ++k)
+      for (int d = 0; d < 3; ++d)
+        coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
+    memset(be, 0, sizeof(double) * nd);
+    kernel(be, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);
+    const int32_t* cd = dofs + (size_t)c * nd;
+    for (int i = 0; i < nd; ++i) b[cd[i]] += be[i];
+  }
+}
+
+/* out[cbody[e]] += the functional's value on entity e (one number per body) */
+void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* out)
+{
+  kernel_t kernel = (kernel_t)kernel_address;
+  double coords[3 * 64];
+  uint8_t perm = 0;
+  for (int e = 0; e < n; ++e) {
+    int32_t c = cells[e];
+    for (int k = 0; k < nx; ++k)
+      for (int d = 0; d < 3; ++d)
+        coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
+    double v = 0.0;
+    kernel(&v, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);
+    out[cbody[e]] += v;
+  }
+}
 """
 
 C_DECL = """
@@ -195,11 +240,20 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets, uintptr_
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff);
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff,
+                    const int32_t* cbody, int kstride);
 void rodfem_element_pattern(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
                             int nd, int nx, const int32_t* xdofs, const double* x,
                             const double* coeffs, int cstride, const double* consts, uint8_t* mask);
 void rodfem_set(double* a, int n, const int64_t* positions, double value);
+void rodfem_batch_vector(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* b);
+void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* out);
 """
 
 class _Block:
@@ -427,7 +481,7 @@ class FastJacobian:
                     st["di"], st["dj"], da, st["oi"], st["oj"], oa, st["ghost_col"],
                     ffi.from_buffer("int32_t[]", self.grow[ng_total:]),
                     ffi.from_buffer("int32_t[]", self.gcol[ng_total:]),
-                    ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total, self.roff)
+                    ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total, self.roff, ffi.NULL, 0)
                 if ng < 0:
                     break
                 ng_total += ng
