@@ -76,11 +76,13 @@ class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None):
+                 momentum: Optional[bool] = None, batch: bool = True):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
-        when no load acts."""
+        when no load acts.  batch: bodies of the same compiled forms assembled together
+        (rodfem/fem/batch.py; serial); False: body by body."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
+        self.batch = batch
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
@@ -219,7 +221,8 @@ class System:
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
                        for r in refs]
         self.assembler = BlockAssembler(self.layout, self.blocks,
-                                        JointRows(self.points) if (self.joints or self.components) else None)
+                                        JointRows(self.points) if (self.joints or self.components) else None,
+                                        batch=self.batch)
         self.X1 = self.assembler.vector
         self.X0 = self.layout.create_vector()
         self._pull(self.X1, "x1")

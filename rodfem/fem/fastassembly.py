@@ -256,6 +256,30 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
                          int kstride, double* out);
 """
 
+def form_integrals(form):
+    """[(integral type, id, kernel address, cells, local facets or None)] of a compiled form, cell
+    integrals first (the order of DOLFINx's assembly)."""
+    from dolfinx.fem import IntegralType
+    ffi = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, form.mesh.comm).ffi
+    ufcx = form.ufcx_form
+    codes = {IntegralType.cell: 0, IntegralType.exterior_facet: 1}
+    out = []
+    for itype in sorted(form.integral_types, key=lambda t: codes[t]):
+        code = codes[itype]
+        uids = [ufcx.integral_ids(code)[k] for k in range(ufcx.num_integrals(code))]
+        for i in form.integral_ids(itype):
+            integral = ufcx.integrals(code)[uids.index(i)]
+            address = int(ffi.cast("uintptr_t", integral.tabulate_tensor_float64))
+            dom = np.asarray(form.domains(itype, i), dtype=np.int32)
+            if itype == IntegralType.cell:
+                cells, facets = np.ascontiguousarray(dom.reshape(-1)), None
+            else:
+                dom = dom.reshape(-1, 2)
+                cells, facets = np.ascontiguousarray(dom[:, 0]), np.ascontiguousarray(dom[:, 1])
+            out.append((itype, i, address, cells, facets))
+    return out
+
+
 class _Block:
     """A sequential AIJ block: its structure (copied once) and its values (open/close)."""
 
@@ -289,7 +313,6 @@ class FastJacobian:
                 and set(J.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet})
 
     def __init__(self, J, bcs):
-        from dolfinx.fem import IntegralType
         self.J, self.bcs = J, list(bcs)
         V = J.function_spaces[0]
         self.mod = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, V.mesh.comm)
@@ -310,23 +333,7 @@ class FastJacobian:
             bc[idx] = 1
         self.bc = bc
         self.bc_rows = np.flatnonzero(bc[:self.nown]).astype(np.int32)
-        ufcx = J.ufcx_form
-        codes = {IntegralType.cell: 0, IntegralType.exterior_facet: 1}
-        ffi = self.mod.ffi
-        self.integrals = []
-        for itype in sorted(J.integral_types, key=lambda t: codes[t]):
-            code = codes[itype]
-            uids = [ufcx.integral_ids(code)[k] for k in range(ufcx.num_integrals(code))]
-            for i in J.integral_ids(itype):
-                integral = ufcx.integrals(code)[uids.index(i)]
-                address = int(ffi.cast("uintptr_t", integral.tabulate_tensor_float64))
-                dom = np.asarray(J.domains(itype, i), dtype=np.int32)
-                if itype == IntegralType.cell:
-                    cells, facets = np.ascontiguousarray(dom.reshape(-1)), None
-                else:
-                    dom = dom.reshape(-1, 2)
-                    cells, facets = np.ascontiguousarray(dom[:, 0]), np.ascontiguousarray(dom[:, 1])
-                self.integrals.append((itype, i, address, cells, facets))
+        self.integrals = form_integrals(J)
         self.comm = mesh.comm
         masks = self._element_masks()
         share = self.comm.allreduce(max((m.mean() for m in masks), default=1.0), op=MPI.MAX)
