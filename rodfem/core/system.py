@@ -36,6 +36,7 @@ from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
+from rodfem.fem.batch import Functionals
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
 
@@ -233,6 +234,7 @@ class System:
             start_multipliers(self)
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
+        self._scalar_forms = {}
         self._ready = True
         return self
 
@@ -396,9 +398,16 @@ class System:
 
     # -- evaluation -------------------------------------------------------------
     def _sum(self, key):
-        local = sum(fem.assemble_scalar(self.compiled[(n, key)]) for n in self.bodies
-                    if self.compiled.get((n, key)) is not None)
-        return self.comm.allreduce(local, op=MPI.SUM)
+        """The sum over the bodies of the functional `key` at x_{n+1} (summed in the bodies' order)."""
+        return self.comm.allreduce(sum(self._functionals(key).values(self.X1.getArray(readonly=True))), op=MPI.SUM)
+
+    def _functionals(self, key):
+        """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
+        if key not in self._scalar_forms:
+            forms = [self.compiled.get((n, key)) for n in self.bodies]
+            self._scalar_forms[key] = Functionals(forms, [r.body.x1 for r in self.bodies.values()],
+                                                  [blk.lo for blk in self.blocks], self.layout.size_local, self.batch)
+        return self._scalar_forms[key]
 
     def assemble(self, compiled) -> float:
         """A compiled scalar form, summed over the ranks."""

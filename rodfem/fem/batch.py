@@ -187,12 +187,14 @@ class FormBatch:
         """Each body's value of the functional at X."""
         self._coefficients(X)
         ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
-        out = np.zeros(self.nb)
-        for it in self.integrals:
+        total = np.zeros(self.nb)
+        for it in self.integrals:   # (DOLFINx: each integral's sum, then their sum)
+            out = np.zeros(self.nb)
             lib.rodfem_batch_scalar(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nx, p["xdofs"],
                                     p["x"], it["p_coeffs"], it["cstride"], p["consts"], it["p_body"], self.kstride,
                                     ffi.from_buffer("double[]", out))
-        return out
+            total += out
+        return total
 
     def add_matrix(self, X, bc, nown, da, di, dj, ghost, room):
         """Add the bilinear form at X into the CSR values da (structure di, dj; rows and columns with
@@ -348,3 +350,41 @@ def group(blocks, size):
         except ValueError:   # coefficients the batch cannot gather: body by body
             others += members
     return batches, others
+
+
+class Functionals:
+    """One functional of many bodies (their H, supplied work, an observable), each body's value:
+    the bodies of the same compiled form in batches (serial), the others by DOLFINx.
+
+        f = Functionals(forms, iterates, offsets, size)   # forms[b]: body b's form or None
+        f.values(X)                                        # [value of body b, for b with a form]
+    """
+
+    def __init__(self, forms, iterates, offsets, size, batch=True):
+        from dolfinx import fem
+        self._assemble = fem.assemble_scalar
+        present = [b for b, f in enumerate(forms) if f is not None]
+        by_key = {}
+        for b in present:
+            if batch and batchable(forms[b]):
+                by_key.setdefault(kernel_key(forms[b]), []).append(b)
+        self.batches, self.single = [], [b for b in present if not (batch and batchable(forms[b]))]
+        for members in by_key.values():
+            try:
+                if len(members) < 2:
+                    raise ValueError
+                self.batches.append((FormBatch([forms[b] for b in members], [iterates[b] for b in members],
+                                               [offsets[b] for b in members], size), members))
+            except ValueError:
+                self.single += members
+        self.forms, self.order = forms, present
+
+    def values(self, X):
+        """Each body's value at X (X: the system's x_{n+1}; the bodies' other coefficients as they are)."""
+        out = {}
+        for batch, members in self.batches:
+            batch.refresh()
+            out.update(zip(members, batch.scalars(X).tolist()))
+        for b in self.single:
+            out[b] = self._assemble(self.forms[b])
+        return [out[b] for b in self.order]

@@ -226,9 +226,8 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
     for (int k = 0; k < nx; ++k)
       for (int d = 0; d < 3; ++d)
         coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
-    double v = 0.0;
-    kernel(&v, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);
-    out[cbody[e]] += v;
+    kernel(out + cbody[e], coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords,
+           facets ? facets + e : NULL, &perm);   /* the kernel adds to its body's sum, as in DOLFINx */
   }
 }
 """
