@@ -298,10 +298,12 @@ class System:
 
     def _push(self, X, which):
         arr = X.getArray(readonly=True)
+        serial = self.comm.size == 1   # (no ghosts to update)
         for blk, ref in zip(self.blocks, self.bodies.values()):
             f = getattr(ref.body, which)
             f.x.array[: blk.hi - blk.lo] = arr[blk.lo:blk.hi]
-            f.x.scatter_forward()
+            if not serial:
+                f.x.scatter_forward()
 
     def set_state(self, X):
         """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
