@@ -36,7 +36,7 @@ from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
-from rodfem.fem.batch import Functionals
+from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
 
@@ -218,6 +218,7 @@ class System:
         if not self.single:
             self.columns.sort(key=lambda c: ("pL".index(c[4]) if c[4] in "pL" and c[5] == "_" else 2, c))
         self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
+        self._copies = {}
         self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
                        for r in refs]
@@ -235,6 +236,9 @@ class System:
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._scalar_forms = {}
+        for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
+            self._functionals(key)
+        self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
         self._ready = True
         return self
 
@@ -291,19 +295,22 @@ class System:
         return sides, frames, q0s, scale
 
     # -- the state: X <-> the bodies' Functions -----------------------------------
+    def _segments(self, which):
+        """The bodies' Functions x0 or x1 as segments of the block vector (one C call copies them all)."""
+        if which not in self._copies:
+            self._copies[which] = Segments([getattr(r.body, which) for r in self.bodies.values()],
+                                           [blk.lo for blk in self.blocks], [blk.hi - blk.lo for blk in self.blocks],
+                                           self.comm)
+        return self._copies[which]
+
     def _pull(self, X, which):
-        arr = X.getArray()
-        for blk, ref in zip(self.blocks, self.bodies.values()):
-            arr[blk.lo:blk.hi] = getattr(ref.body, which).x.array[: blk.hi - blk.lo]
+        self._segments(which).get(X.getArray())
 
     def _push(self, X, which):
-        arr = X.getArray(readonly=True)
-        serial = self.comm.size == 1   # (no ghosts to update)
-        for blk, ref in zip(self.blocks, self.bodies.values()):
-            f = getattr(ref.body, which)
-            f.x.array[: blk.hi - blk.lo] = arr[blk.lo:blk.hi]
-            if not serial:
-                f.x.scatter_forward()
+        self._segments(which).put(X.getArray(readonly=True))
+        if self.comm.size > 1:   # the ghosts
+            for r in self.bodies.values():
+                getattr(r.body, which).x.scatter_forward()
 
     def set_state(self, X):
         """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
@@ -447,8 +454,8 @@ class System:
             obs.update(self.points.observe(self.X1))
         if not self.single:
             obs.update({k[4:]: self._sum(k) for k in self.columns})
-        for name, ref in self.bodies.items():
-            for k, value in ref.body.monitor().items():
+        for name, body in self._monitored:   # (the bodies with interactions)
+            for k, value in body.monitor().items():
                 obs[f"{name}.{k}" if name else k] = value
         for columns in self.recorders:
             obs.update(columns(self))

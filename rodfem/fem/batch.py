@@ -27,6 +27,51 @@ import numpy as np
 from rodfem.fem import cbuild
 from rodfem.fem.fastassembly import C_DECL, C_SOURCE, form_integrals
 
+COPY_SOURCE = r"""
+#include <stdint.h>
+#include <string.h>
+/* segment k: x[off[k] : off[k] + len[k]] <-> the array at address ptr[k] */
+void rodfem_put(int n, const uintptr_t* ptr, const int64_t* off, const int64_t* len, const double* x)
+{
+  for (int k = 0; k < n; ++k) memcpy((double*)ptr[k], x + off[k], sizeof(double) * len[k]);
+}
+void rodfem_get(int n, const uintptr_t* ptr, const int64_t* off, const int64_t* len, double* x)
+{
+  for (int k = 0; k < n; ++k) memcpy(x + off[k], (const double*)ptr[k], sizeof(double) * len[k]);
+}
+"""
+COPY_DECL = """
+void rodfem_put(int n, const uintptr_t* ptr, const int64_t* off, const int64_t* len, const double* x);
+void rodfem_get(int n, const uintptr_t* ptr, const int64_t* off, const int64_t* len, double* x);
+"""
+
+
+class Segments:
+    """The owned values of many Functions as segments of one array X: f_k.x.array[:n_k] <-> X[lo_k:lo_k + n_k],
+    copied by one C call (`put`: into the Functions, `get`: into X; no ghost update)."""
+
+    def __init__(self, functions, los, lengths, comm):
+        self.mod = cbuild.load("rodfem_segments", COPY_SOURCE, COPY_DECL, comm)
+        self._views = [np.asarray(f.x.array) for f in functions]   # (the memory stays where it is)
+        for v in self._views:
+            assert v.dtype == np.float64 and v.flags.c_contiguous
+        self.ptr = np.array([v.ctypes.data for v in self._views], dtype=np.uintp)
+        self.off = np.asarray(los, dtype=np.int64)
+        self.len = np.asarray(lengths, dtype=np.int64)
+
+    def _args(self, X, kind):
+        ffi = self.mod.ffi
+        return (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
+                ffi.from_buffer("int64_t[]", self.len), ffi.from_buffer(kind, X))
+
+    def put(self, X):
+        """Every Function <- its segment of X."""
+        self.mod.lib.rodfem_put(*self._args(np.ascontiguousarray(X, dtype=np.float64), "double[]"))
+
+    def get(self, X):
+        """X's segments <- the Functions (X: a writable float64 array)."""
+        self.mod.lib.rodfem_get(*self._args(X, "double[]"))
+
 
 def batchable(form) -> bool:
     """A form the batch can take (serial, cell and exterior-facet integrals, no dof transformations)."""
@@ -88,9 +133,9 @@ class FormBatch:
         else:
             self.nd, self.dofs = 0, np.zeros(1, np.int32)
         # the other coefficients: their Functions, and where their values sit in S = (X, others)
-        self.others, self._other_at = [], {}
+        self.others, self._other_at, self._end = [], {}, self.size
         per_body = [self._gather(b, f, iterates[b], offsets[b]) for b, f in enumerate(self.forms)]
-        self.S = np.zeros(self.size + sum(len(o.x.array) for o in self.others))
+        self.S = np.zeros(self._end)
         # the entities of each integral, body by body, and their coefficients' gather indices
         self.integrals = []
         for k, (itype, i, address, _, facets) in enumerate(form_integrals(first)):
@@ -126,7 +171,8 @@ class FormBatch:
             else:
                 key = c.x.array.ctypes.data
                 if key not in self._other_at:
-                    self._other_at[key] = self.size + sum(len(o.x.array) for o in self.others)
+                    self._other_at[key] = self._end
+                    self._end += len(c.x.array)
                     self.others.append(c)
                 base = self._other_at[key]
             cols.append(base + slots[:ncell])
@@ -157,15 +203,33 @@ class FormBatch:
                 if mine.shape != theirs.shape or not np.array_equal(mine, theirs):
                     raise ValueError("the batch's coefficients differ from DOLFINx's packing")
 
+    def _sources(self):
+        """Views of the constants' values (in the kernels' order, when the compiled forms list their
+        constants: rodfem/fem/jit.py) and of the other coefficients' values: `refresh` copies them
+        with one call each.  Checked against DOLFINx's packing, else packed body by body."""
+        import dolfinx.cpp as cpp
+        self._other_views = [np.asarray(o.x.array) for o in self.others]
+        self._const_views = None
+        packed = [np.asarray(cpp.fem.pack_constants(f), dtype=np.float64) for f in self.forms]
+        self.kstride = len(packed[0])
+        self.consts = np.ascontiguousarray(np.concatenate(packed)) if self.kstride else np.zeros(1)
+        self._p["consts"] = self.mod.ffi.from_buffer("double[]", self.consts)
+        if self.kstride and all(hasattr(f, "rodfem_constants") for f in self.forms):
+            views = [np.asarray(c.value).reshape(-1) for f in self.forms for c in f.rodfem_constants]
+            if sum(v.size for v in views) == self.consts.size and np.array_equal(np.concatenate(views), self.consts):
+                self._const_views = views
+
     def refresh(self):
         """Read the bodies' constants and the coefficients other than x_{n+1} (once per step)."""
-        import dolfinx.cpp as cpp
-        consts = [np.asarray(cpp.fem.pack_constants(f), dtype=np.float64) for f in self.forms]
-        self.kstride = len(consts[0])
-        self.consts = np.ascontiguousarray(np.concatenate(consts)) if self.kstride else np.zeros(1)
+        if not hasattr(self, "_other_views"):
+            self._sources()
+        if self._const_views is not None:
+            np.concatenate(self._const_views, out=self.consts)
+        elif self.kstride:
+            import dolfinx.cpp as cpp
+            self.consts[:] = np.concatenate([cpp.fem.pack_constants(f) for f in self.forms])
         if self.others:
-            self.S[self.size:] = np.concatenate([o.x.array for o in self.others])
-        self._p["consts"] = self.mod.ffi.from_buffer("double[]", self.consts)
+            np.concatenate(self._other_views, out=self.S[self.size:])
 
     def _coefficients(self, X):
         self.S[:self.size] = X
@@ -245,6 +309,8 @@ class BlockBatch:
         self.bc[self.bc_rows] = 1
         self.g = np.zeros(len(self.bc_rows))
         self.lifted = [blk for blk in self.blocks if blk.bcs]
+        self.states = Segments(iterates, offsets, [blk.hi - blk.lo for blk in self.blocks],
+                               self.blocks[0].x.function_space.mesh.comm)
         self._room(1024)
         self.refresh()
 
@@ -284,8 +350,7 @@ class BlockBatch:
 
     def sync(self, X):
         """Every body's Function x_{n+1} <- its block of X."""
-        for blk in self.blocks:
-            blk.x.x.array[: blk.hi - blk.lo] = X[blk.lo:blk.hi]
+        self.states.put(X)
 
     def residual(self, X, b):
         """b += the bodies' residuals; Dirichlet rows x - x_D.  The lifting J[:, D] (x_D - x) is zero
