@@ -174,7 +174,7 @@ class BlockAssembler:
         self.bcs = [bc for blk in self.blocks for bc in blk.bcs]
         self.vector = layout.create_vector()    # the unknown X that Newton iterates on
         self.batches, self.single = [], self.blocks
-        if batch and self.comm.size == 1 and len(self.blocks) > 1:
+        if batch and self.comm.size == 1:
             from rodfem.fem.batch import group
             self.batches, self.single = group(self.blocks, layout.size_local)
         self.units = self.batches + self.single   # what assembles: batches, and the blocks on their own

@@ -397,8 +397,8 @@ class BlockBatch:
 
 
 def group(blocks, size):
-    """The blocks in batches of the same compiled forms (at least two bodies, serial, every block
-    with a fast Jacobian), and the others: (batches, other blocks)."""
+    """The blocks in batches of the same compiled forms (serial, every block with a fast Jacobian; a
+    batch of one body still saves DOLFINx's packing and calls), and the others: (batches, other blocks)."""
     by_key, others = {}, []
     for blk in blocks:
         if blk.fast is not None and batchable(blk.F) and batchable(blk.J):
@@ -407,9 +407,6 @@ def group(blocks, size):
             others.append(blk)
     batches = []
     for members in by_key.values():
-        if len(members) < 2:
-            others += members
-            continue
         try:
             batches.append(BlockBatch(members, size))
         except ValueError:   # coefficients the batch cannot gather: body by body
@@ -436,8 +433,6 @@ class Functionals:
         self.batches, self.single = [], [b for b in present if not (batch and batchable(forms[b]))]
         for members in by_key.values():
             try:
-                if len(members) < 2:
-                    raise ValueError
                 self.batches.append((FormBatch([forms[b] for b in members], [iterates[b] for b in members],
                                                [offsets[b] for b in members], size), members))
             except ValueError:
