@@ -183,7 +183,6 @@ class BlockAssembler:
         for u in self.units:
             u.attach(self.A)
         self._state = self._nonzero_state(self.A)
-        self._fresh = False
 
     def create_vector(self):
         return self.layout.create_vector()
@@ -196,11 +195,6 @@ class BlockAssembler:
         X = self._iterate(xin)
         for batch in self.batches:
             batch.sync(X)
-        self._fresh = False
-
-    def invalidate(self):
-        """The constants or coefficients other than the iterate may have changed (a new step)."""
-        self._fresh = False
 
     def _iterate(self, xin):
         """X <- xin, seen by the bodies on their own and the coupling (a batch reads X itself)."""
@@ -209,10 +203,6 @@ class BlockAssembler:
         X = self.vector.getArray(readonly=True)
         for blk in self.single:
             blk.set_state(X)
-        if not self._fresh:
-            for batch in self.batches:
-                batch.refresh()
-            self._fresh = True
         if self.coupling:
             self.coupling.update(self.vector)
         return X

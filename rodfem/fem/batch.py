@@ -12,9 +12,9 @@ if they were the cells of one disconnected mesh,
     coefficient slot of a cell ->  an index into S = (X, the other coefficients' values)
 
 and one C loop (rodfem/fem/fastassembly.py) calls the form's kernel for every cell of every body,
-each with its body's constants (packed once per step, `refresh`).  The coefficient x_{n+1} (the
-iterate) is read straight from X; every other coefficient (x_n, a load's Function) from its
-Function at `refresh`.  The gather indices are checked at build against DOLFINx's own packing
+each with its body's constants (copied from their values at each assembly, `refresh`).  The
+coefficient x_{n+1} (the iterate) is read straight from X; every other coefficient (x_n, a load's
+Function) from its Function at `refresh`.  The gather indices are checked at build against DOLFINx's own packing
 (`pack_coefficients`), entry by entry: what the kernels see is what DOLFINx would give them, and
 the sums are made in DOLFINx's order (integral by integral, cell by cell, body by body), so the
 batch's residual, Jacobian and functionals are DOLFINx's, bit for bit.
@@ -99,8 +99,8 @@ class FormBatch:
     """One compiled form (`forms[b]` of body b) over all bodies' cells.
 
     iterates[b]: body b's Function x_{n+1}, whose values are X[offsets[b]:offsets[b] + n_b];
-    size: the length of X.  `refresh()` reads the constants and the other coefficients (call it
-    when they may have changed: once per step); `vector(X, b)` adds the residual into the array b,
+    size: the length of X.  `refresh()` reads the constants and the other coefficients (one
+    copy each; before every assembly); `vector(X, b)` adds the residual into the array b,
     `scalars(X)` gives each body's value of a functional, `add_matrix` the Jacobian (rodfem_assemble).
     """
 
@@ -220,7 +220,7 @@ class FormBatch:
                 self._const_views = views
 
     def refresh(self):
-        """Read the bodies' constants and the coefficients other than x_{n+1} (once per step)."""
+        """Read the bodies' constants and the coefficients other than x_{n+1}."""
         if not hasattr(self, "_other_views"):
             self._sources()
         if self._const_views is not None:
@@ -303,7 +303,7 @@ class BlockBatch:
             for bc in blk.bcs:
                 dofs = np.asarray(bc.dof_indices()[0], dtype=np.int64)
                 rows.append(blk.lo + dofs)
-                self._g.append((bc.g if hasattr(bc, "g") else bc.value, dofs))
+                self._g.append((np.asarray((bc.g if hasattr(bc, "g") else bc.value).x.array), dofs))
         self.bc_rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
         self.bc = np.zeros(self.size, np.int8)
         self.bc[self.bc_rows] = 1
@@ -312,14 +312,13 @@ class BlockBatch:
         self.states = Segments(iterates, offsets, [blk.hi - blk.lo for blk in self.blocks],
                                self.blocks[0].x.function_space.mesh.comm)
         self._room(1024)
-        self.refresh()
 
     def refresh(self):
-        """Constants, x_n and the other coefficients, the Dirichlet values (once per step)."""
+        """Constants, x_n and the other coefficients, the Dirichlet values (one copy each: at every
+        assembly, as DOLFINx reads them)."""
         self.F.refresh()
-        self.J.refresh()
         if self._g:
-            self.g = np.concatenate([np.asarray(g.x.array)[dofs] for g, dofs in self._g])
+            self.g = np.concatenate([g[dofs] for g, dofs in self._g])
 
     def _room(self, n):
         self.room = (np.zeros(n, np.int32), np.zeros(n, np.int32), np.zeros(n))
@@ -355,6 +354,7 @@ class BlockBatch:
     def residual(self, X, b):
         """b += the bodies' residuals; Dirichlet rows x - x_D.  The lifting J[:, D] (x_D - x) is zero
         when the iterate meets its conditions (always, after the start); where it does not, DOLFINx's."""
+        self.refresh()
         self.F.vector(X, b)
         if len(self.bc_rows):
             gap = self.g - X[self.bc_rows]
@@ -375,6 +375,7 @@ class BlockBatch:
     def add_jacobian(self, A, X):
         """Add the bodies' Jacobians into A (zeroed before); False when the room for entries outside
         the pattern was too small (it is doubled: zero A and try again)."""
+        self.J.refresh()
         ffi = self.J.mod.ffi
         da = ffi.cast("double*", self.diag.open())
         try:

@@ -202,7 +202,6 @@ class Newton:
 
     def _solve(self, step, t):
         self._start.copy(self._work)
-        self.assembler.invalidate()   # a new step: its constants (h, loads) and x_n
         try:
             self.snes.solve(None, self._work)
         except PETSc.Error as e:  # not a divergence (that is a converged reason), but PETSc giving up
