@@ -53,6 +53,7 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
+BATCH = "tests/core/test_batch.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -609,6 +610,25 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- bodies assembled as a batch (rodfem/fem/batch.py) ------------------------------------------
+    M("batch-first-body-constants", "rodfem/fem/fastassembly.py",
+      [("    kernel(be, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);",
+        "    kernel(be, coeffs + (size_t)e * cstride, consts, coords, facets ? facets + e : NULL, &perm);")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "every body of a batch assembled with the first body's constants (its load, its stiffness)"),
+    M("batch-stale-coefficients", "rodfem/fem/batch.py",
+      [("            np.concatenate(self._other_views, out=self.S[self.size:])",
+        "            pass")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "the batch keeps the coefficients other than the iterate (x_n) as they were at build"),
+    M("batch-no-lifting", "rodfem/fem/batch.py",
+      [("            if np.any(gap != 0.0):", "            if False:")],
+      [BATCH + "::test_residual_at_a_state_off_the_supports"],
+      "the batch's residual leaves out the lifting of a support the iterate does not meet"),
+    M("batch-no-dirichlet-diagonal", "rodfem/fem/batch.py",
+      [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
 ]
 
 

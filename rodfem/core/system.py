@@ -76,14 +76,17 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
+    batch = True   # the default: bodies of the same compiled forms assembled together (serial)
+
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None, batch: bool = True):
+                 momentum: Optional[bool] = None, batch: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts.  batch: bodies of the same compiled forms assembled together
-        (rodfem/fem/batch.py; serial); False: body by body."""
+        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
-        self.batch = batch
+        if batch is not None:
+            self.batch = batch
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
@@ -235,7 +238,7 @@ class System:
             start_multipliers(self)
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
-        self._scalar_forms = {}
+        self._scalar_forms, self._x1_values = {}, np.zeros(self.layout.size_local)
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
         self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
@@ -407,8 +410,10 @@ class System:
 
     # -- evaluation -------------------------------------------------------------
     def _sum(self, key):
-        """The sum over the bodies of the functional `key` at x_{n+1} (summed in the bodies' order)."""
-        return self.comm.allreduce(sum(self._functionals(key).values(self.X1.getArray(readonly=True))), op=MPI.SUM)
+        """The sum over the bodies of the functional `key` at their states x1 (summed in the bodies' order)."""
+        X = self._x1_values
+        self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
+        return self.comm.allreduce(sum(self._functionals(key).values(X)), op=MPI.SUM)
 
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
