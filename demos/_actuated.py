@@ -1,6 +1,6 @@
 # Shared pieces of the actuated-arm demos (forms/actuators.py): the soft
 # silicone arm with three pneumatic chambers (its section, material and
-# parameters), the pressure programme of Paper 1's example 04, and smooth
+# parameters), the pressure programme of example 04 of Kinon, Eugster & Betsch (2026), and smooth
 # switching functions for input histories.  (The scenes assemble only the
 # actuators whose input is not zero.)
 import numpy as np
@@ -9,7 +9,7 @@ from rodfem.app.scene import Parameter, density, stiffness
 from rodfem.errors import ParameterError
 from rodfem.forms.cosserat_rod import CosseratRod
 
-# The soft arm.  Paper 1 (Kinon, Eugster, Betsch 2026, example 04) publishes
+# The soft arm.  Kinon, Eugster & Betsch (2026, example 04) publishes
 # only the arm's length L = 0.1755, the chamber angles and the pressure
 # programme (LisaLatussek/PHMultiBodySystems @98acbf24, results/
 # example_04_soft_robotic_arm).  The rest is chosen here for a cast silicone
@@ -81,7 +81,7 @@ def smoothstep(t, t0, t1):
 
 
 def circle_programme(amplitude, t_ramp=0.5, t_circle=3.0, smooth=False):
-    """Paper 1's pressure programme (fitted to the published input file to < 3e-4):
+    """The paper's pressure programme (fitted to the published input file to < 3e-4):
     a(t) = amplitude sin^2(pi t / (2 t_ramp)) on [0, t_ramp], amplitude while the angle
     phi(t) = pi (1 - cos(pi (t - t_ramp) / t_circle)) runs from 0 to 2 pi, then back down
     over t_ramp; returns (a, phi) as functions of t.

@@ -11,6 +11,7 @@
 # Statics: set rhoA = rhoI = 0, t_ramp = t_load = t_end (a smooth ramp).
 #
 # Run it:  rodfem run cantilever-2d --set fy=-10 --out results/cantilever-2d
+
 import sys
 
 import numpy as np

@@ -107,6 +107,7 @@
 # Run it:  rodfem run crane-inverse --out results/crane-inverse
 #          rodfem run crane-inverse --set replay=raw --set dt=0.0125
 #          rodfem run crane-inverse --set flat=4        (the parasitic mode in F_servo)
+
 import sys
 from types import SimpleNamespace
 

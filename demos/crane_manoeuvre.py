@@ -1,12 +1,12 @@
 # # Crane manoeuvre: a hanging cable with a load, driven at the top
 #
-# The harbour-crane situation of seed 003: a cable of reference length L
+# The harbour-crane situation of Kinon et al. (PAMM 2023): a cable of reference length L
 # hangs from a trolley at the origin (z is up, gravity in -z) and carries a
 # load of mass m at its lower end.  The trolley rides on a horizontal rail:
 # its vertical position is fixed (support 'fix-z'), and it is pushed along x
 # by a force input F(t) = F0 sin(2 pi t / t_move) for t <= t_move, zero
 # after -- accelerate, then brake, the "left-to-right manoeuvre" of the
-# authors (Paper 4: F = rhoA sin(pi t / 2) for t <= 4, EA = 20, rhoA = 1,
+# authors (IFAC 2024: F = rhoA sin(pi t / 2) for t <= 4, EA = 20, rhoA = 1,
 # h = 0.05, T = 6, starting from the static equilibrium).
 #
 # The ports of this scene:
@@ -18,6 +18,7 @@
 # H_{n+1} - H_n = h y.u holds at every step; H - supplied is constant.
 #
 # Run it:  rodfem run crane-manoeuvre --out results/crane-manoeuvre
+
 import sys
 
 import numpy as np

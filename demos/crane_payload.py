@@ -49,6 +49,7 @@
 #
 # Run it:  rodfem run crane-payload --out results/crane-payload
 #          rodfem run crane-payload --set spin=0 --set F0=2   (a planar swing)
+
 import sys
 from types import SimpleNamespace
 

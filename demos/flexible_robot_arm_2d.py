@@ -50,6 +50,7 @@
 #
 # Run it:  rodfem run flexible-robot-arm-2d --out results/flexible-robot-arm-2d
 #          rodfem run flexible-robot-arm-2d --set tip_mass=20 --set tip_inertia=1
+
 import sys
 
 from rodfem import Load, Support, System, constant_in_time

@@ -12,6 +12,7 @@
 #
 # Run it:  rodfem run flying-spaghetti-2d --out results/flying-spaghetti-2d
 #     or:  python demos/flying_spaghetti_2d.py --out results/flying-spaghetti-2d
+
 import sys
 
 import numpy as np

@@ -17,6 +17,7 @@
 # L_x..L_z) must stay constant, and H_{n+1} - H_n = h y.u holds every step.
 #
 # Run it:  rodfem run flying-spaghetti-3d --set variant=spatial --out results/flying-spaghetti-3d
+
 import sys
 
 import numpy as np

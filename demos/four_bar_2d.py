@@ -18,6 +18,7 @@
 #
 # Run it:  rodfem run four-bar-2d --out results/four-bar-2d
 #          rodfem run four-bar-2d --set E2=2.1e8 --set dt=0.005   (the softer coupler)
+
 import sys
 
 import numpy as np

@@ -33,6 +33,7 @@
 # Run it:  rodfem run four-particle --out results/four-particle
 #          rodfem run four-particle --set integrator=midpoint --set dt=0.25 --out results/four-particle-mp
 #          rodfem run four-particle --set eta0=0 --out results/four-particle-conservative
+
 import sys
 
 from rodfem.app.cli import main

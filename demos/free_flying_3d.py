@@ -18,7 +18,7 @@
 #
 # Material (the 3D flying spaghetti's): EA = GA = 1e4, GJ = 200, EI = 100,
 # rhoA = 1, rhoJ = (10, 10, 10); P2 kinematics, the midpoint rule
-# (seed 000: exact energy balance, orthonormality at the nodes).
+# (Kinon, Eugster & Betsch 2026: exact energy balance, orthonormality at the nodes).
 #
 # What to look at: no support and no joint to the ground, so the System
 # writes the totals p_x, p_y, p_z (linear momentum) and L_x, L_y, L_z
@@ -35,6 +35,7 @@
 #
 # Run it:  rodfem run free-flying-3d --out results/free-flying-3d
 #          rodfem run free-flying-3d --set variant=rod-body --out results/free-flying-rod-body
+
 import sys
 
 import numpy as np

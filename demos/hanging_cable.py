@@ -22,6 +22,7 @@
 #
 # Run it:  rodfem run hanging-cable --out results/hanging-cable
 #          rodfem run hanging-cable --set material=tension-only --set vy0=2 --out results/hanging-3d
+
 import sys
 
 import numpy as np

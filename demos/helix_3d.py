@@ -22,6 +22,7 @@
 # Statics through the integrator (zero densities), smooth load ramp over [0, t_end].
 #
 # Run it:  rodfem run helix-3d --set slenderness=1e4 --out results/helix-3d
+
 import sys
 
 import numpy as np

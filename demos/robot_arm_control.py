@@ -43,6 +43,7 @@
 # Run it:  rodfem run robot-arm-control --out results/robot-arm-control
 #          rodfem run robot-arm-control --set controller=law --out results/robot-arm-law
 #          rodfem run robot-arm-control --set controller=pid --out results/robot-arm-pid
+
 import sys
 
 import numpy as np

@@ -13,6 +13,7 @@
 # alternate around equilibrium).
 #
 # Run it:  rodfem run roll-up-2d --out results/roll-up-2d
+
 import sys
 
 import numpy as np

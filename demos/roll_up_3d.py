@@ -20,6 +20,7 @@
 # so the final state is the equilibrium up to O(h^3) in the load step.
 #
 # Run it:  rodfem run roll-up-3d --out results/roll-up-3d
+
 import sys
 
 import numpy as np

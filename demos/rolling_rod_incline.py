@@ -49,6 +49,7 @@
 #
 # Run it:  rodfem run rolling-rod-incline --out results/rolling-rod-incline
 #          rodfem run rolling-rod-incline --set alpha=60 --out results/sliding-rod
+
 import sys
 
 import numpy as np

@@ -50,6 +50,7 @@
 #
 # Run it:  rodfem run slider-crank-3d --out results/slider-crank-3d
 #          rodfem run slider-crank-3d --set dt=0.0005
+
 import sys
 
 import numpy as np

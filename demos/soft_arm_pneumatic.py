@@ -1,9 +1,9 @@
-# # Soft robotic arm driven by three pneumatic chambers (Paper 1, example 04)
+# # Soft robotic arm driven by three pneumatic chambers (Kinon, Eugster & Betsch 2026, example 04)
 #
 # A straight silicone arm of length L = 0.1755 stands along +z, clamped at
 # its base z = 0.  Three chambers run along it, 120 degrees apart at the
 # angles theta_i = 30, 150, 270 degrees of the cross-section plane
-# (d2 = e_x, d3 = e_y).  Paper 1 (Kinon, Eugster & Betsch, CMA 458 (2026)
+# (d2 = e_x, d3 = e_y).  Kinon, Eugster & Betsch (CMA 458 (2026)
 # 118966) drives them with
 #
 #     p_i(t) = (a(t)/2) (1 + cos(phi(t) - theta_i)),
@@ -28,10 +28,10 @@
 # 2 mm at 5 mm from the axis, |a| = 50 kPa.  Published circle: radius 0.092-
 # 0.093 at height 0.1466-0.1477 (4.4 % elongation, 64 degrees of bending);
 # with these choices the quasi-static circle has radius 0.0841 at height
-# 0.1530 (3.8 %, 58 degrees).  Sign: Paper 1's a = -50 elongates the arm,
+# 0.1530 (3.8 %, 58 degrees).  Sign: the paper's a = -50 elongates the arm,
 # so its p is minus the gauge pressure; here a > 0 is the gauge pressure.
 # The published tip leads the angle phi, ours trails it by 180 degrees (an
-# inflated chamber bends the arm away from itself); Paper 1's offset
+# inflated chamber bends the arm away from itself); the paper's offset
 # convention is not published, the circle is the same.
 #
 # Modes: 'static' (default) -- densities zero, every step an equilibrium
@@ -47,6 +47,7 @@
 #
 # Run it:  rodfem run soft-arm-pneumatic --out results/soft-arm-pneumatic
 #          rodfem run soft-arm-pneumatic --set mode=dynamic --set dt=0.005
+
 import sys
 
 import numpy as np
@@ -126,7 +127,7 @@ def reference(p):
 
 
 scene = Scene("soft-arm-pneumatic",
-              "silicone arm, three pneumatic chambers sweep the tip once around a circle (Paper 1, example 04)",
+              "silicone arm, three pneumatic chambers sweep the tip once around a circle (Kinon et al. 2026, example 04)",
               parameters, build, reference=reference,
               notes="Chambers are ports (input gauge pressure, output dV/dt); the columns volume_chamber1..3 "
                     "are their volumes.  Published tip circle: radius 0.092, height 0.147.")

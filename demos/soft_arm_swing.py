@@ -23,6 +23,7 @@
 # the same way.
 #
 # Run it:  rodfem run soft-arm-swing --out results/soft-arm-swing
+
 import sys
 
 import numpy as np

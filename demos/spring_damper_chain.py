@@ -31,6 +31,7 @@
 # Run it:  rodfem run spring-damper-chain --out results/spring-damper-chain
 #          rodfem run spring-damper-chain --set law=quartic --set n_bodies=6
 #          rodfem static spring-damper-chain --out results/spring-damper-chain-static
+
 import sys
 
 import numpy as np

@@ -24,6 +24,7 @@
 # length (L/2 in s by default) in t_end = 0.5 L / c_s; `speeds` gives c.
 #
 # Run it:  rodfem run taut-string-wave --out results/taut-string-wave
+
 import sys
 
 import numpy as np

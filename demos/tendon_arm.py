@@ -29,6 +29,7 @@
 #
 # Run it:  rodfem run tendon-arm --out results/tendon-arm
 #          rodfem run tendon-arm --set routing=helical --set g=0
+
 import functools
 import sys
 

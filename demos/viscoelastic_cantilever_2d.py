@@ -25,6 +25,7 @@
 # is Hooke's law whatever `material` says.
 #
 # Run it:  rodfem run viscoelastic-cantilever-2d --set fy=-10 --out results/viscoelastic-cantilever-2d
+
 import sys
 
 import numpy as np

@@ -8,7 +8,7 @@
 # d1 and a force on d2 and d3), then the rod vibrates freely until
 # T = 0.3 s, with h = 1 ms.
 #
-# The rod is inextensible and shear-rigid, as HK24's Kirchhoff beam: the
+# The rod is inextensible and shear-rigid, as the Kirchhoff beam of Herrmann & Kotyczka (2024), doi 10.1016/j.cma.2024.117367: the
 # compliances C_N of the equilibrium branch are ZERO (N is the multiplier of
 # d_t Gamma = 0).  Torsion and bending are elastic (E, G = E/(2(1 + nu)))
 # plus one Maxwell branch on the moments M (compliance form, forms/
@@ -21,9 +21,9 @@
 # energy (history column `dissipated`), step by step to solver tolerance:
 # H + dissipated - supplied is constant (energy.png).
 #
-# Not from the sources: the time profile of the wrench (HK24's "profile 4"
+# Not from the sources: the time profile of the wrench (Herrmann & Kotyczka's "profile 4"
 # of their toolbox is not public); here a smooth pulse sin^2(pi t / t_load)
-# with the peak values of HK24's wrench 0.5 [0.5 0 0 0 2 2] (torque 0.25 N m
+# with the peak values of their wrench 0.5 [0.5 0 0 0 2 2] (torque 0.25 N m
 # about d1, force 1 N on d2 and on d3, body frame) -- also the order
 # [moment; force] of that vector is inferred.  The Maxwell parameters of the
 # published dissipative run are not known either: E1 = 0.1 E and tau1 = 0.05 s
@@ -32,6 +32,7 @@
 #
 # Run it:  rodfem run viscoelastic-cantilever-3d --out results/viscoelastic-cantilever-3d
 #          rodfem run viscoelastic-cantilever-3d --set E1=0 --out results/cantilever-3d-elastic
+
 import sys
 
 import numpy as np
@@ -97,7 +98,7 @@ def build(p, comm):
 
 
 scene = Scene("viscoelastic-cantilever-3d",
-              "inextensible 3D cantilever (HK24): tip wrench pulse, then vibration damped by a Maxwell branch on M",
+              "inextensible 3D cantilever (Herrmann & Kotyczka): tip wrench, then vibration damped by a Maxwell branch on M",
               parameters, build,
               notes="E1 = 0: the elastic rod. H + dissipated - supplied is conserved.")
 

@@ -23,7 +23,7 @@
 #
 # The start: the static equilibrium under gravity with the branch relaxed
 # (C_1 = 1), as after hanging for a long time -- the equilibrium branch
-# carries the weight.  Paper 4's data: EA = 20 split equally into the two
+# carries the weight.  The data of Kinon et al. (IFAC 2024): EA = 20 split equally into the two
 # branches (EA = EA1 = 10 here), tau = 0.02.  (Their code's dashpot,
 # d_t C_el = ... - (2/etaA) W'(C_el) with etaA = tau EA = 0.4, relaxes
 # C_el - 1 with the time 2 etaA/(EA/2) = 0.08 in this scene's convention:
@@ -35,6 +35,7 @@
 # --set integrator=midpoint the balance is no longer exact (W is not quadratic).
 #
 # Run it:  rodfem run viscoelastic-string --out results/viscoelastic-string
+
 import sys
 
 import numpy as np
@@ -53,7 +54,7 @@ parameters = common(n_elements=10, dt=0.05, t_end=6.0, integrator="discrete-grad
     relaxation_time("tau1", 0.02, "Maxwell branch relaxation time (inf: a parallel spring)"),
     stiffness("L", 1.0, "m", "reference (unstretched) length"),
     Parameter("g", 9.81, "m/s^2", "gravity, acting in -z", low=0),
-    Parameter("Fx", 1.0, "N", "amplitude of the force on the top node (rhoA x 1 m/s^2 in Paper 4)"),
+    Parameter("Fx", 1.0, "N", "amplitude of the force on the top node (rhoA x 1 m/s^2 in Kinon et al. 2024)"),
     stiffness("t_drive", 4.0, "s", "the force Fx sin(pi t/2) acts for t <= t_drive"),
 ]
 
@@ -82,7 +83,7 @@ def build(p, comm):
 
 
 scene = Scene("viscoelastic-string",
-              "hanging viscoelastic string (Paper 4): top node pushed along x, then free; "
+              "hanging viscoelastic string (Kinon et al. 2024): top node pushed along x, then free; "
               "H + dissipated - supplied conserved",
               parameters, build,
               notes="H excludes the gravity potential (gravity's work is in 'supplied').")

@@ -14,6 +14,7 @@
 # director d1 carries no mass (the DAE case of a singular mass matrix).
 #
 # Run it:  rodfem run whirling-rod-3d --out results/whirling-rod-3d
+
 import sys
 
 import numpy as np

@@ -1,6 +1,6 @@
 """3D Cosserat rod with directors as a port-Hamiltonian system (mixed, compliance form).
 
-Seed 000; Kinon, Eugster, Betsch, CMA 458 (2026) 118966 (arXiv 2512.19408).
+Kinon, Eugster & Betsch, Comput. Methods Appl. Mech. Engrg. 458 (2026) 118966, doi 10.1016/j.cma.2026.118966 (arXiv 2512.19408).
 
 Configuration q = (phi, d1, d2, d3) in R^12 (phi: centreline, field "r"),
 R(d) = [d1 d2 d3]; d1 is the axis (tangent of the stress-free straight rod),
@@ -48,7 +48,7 @@ N_i (M_i) its multiplier.  N, M start at zero in the stress-free reference
 configuration, which may be curved: the rate form never needs the reference
 strains Gamma^0, K^0.
 
-Discretization (seed 000): q, v in P2, N, M in DG1, lambda in P2 collocated
+Discretization (Kinon, Eugster & Betsch 2026): q, v in P2, N, M in DG1, lambda in P2 collocated
 at the nodes: the constraint rows AND the reaction forces use the 3-point
 Gauss-Lobatto rule whose points are the P2 nodes (dolfinx-notes.md §3), so
 g(d_m, w_m) = 0 holds node by node.  Midpoint rule, everything at x_{n+1/2}

@@ -1,6 +1,6 @@
 """Planar geometrically exact (Simo-Reissner) beam as a port-Hamiltonian system.
 
-Seeds 001/002; Kinon, Betsch, Eugster, Multibody Syst. Dyn. (2025).
+Kinon, Betsch & Eugster, Multibody Syst. Dyn. (2025), doi 10.1007/s11044-025-10087-9.
 
 State x = (r, phi, v, omega, Gamma, kappa) on s in [0, L]:
 centreline r in R^2, angle phi, velocities v = r', omega = phi' (in time),
@@ -16,7 +16,7 @@ Local PH equations (N = dW/dGamma, M = dW/dkappa, n = A N, S = [[0, -1], [1, 0]]
     d_t Gamma = A^T (d_s v - omega S d_s r),          d_t kappa = d_s omega
 
 Sign of S: with S = [[0, -1], [1, 0]] in *this* arrangement the model is
-objective; seed 002 writes omega A^T S d_s r with S = [[0, 1], [-1, 0]],
+objective; the authors' slides write omega A^T S d_s r with S = [[0, 1], [-1, 0]],
 which is the same.  (Flipping it still conserves energy but lets a rigidly
 spinning beam build up strain; tests/models/test_planar_beam.py catches that.)
 

@@ -1,4 +1,6 @@
-"""Hyperelastic string (cable) in 3D as a port-Hamiltonian system (seed 003; Papers 4, 5).
+"""Hyperelastic string (cable) in 3D as a port-Hamiltonian system
+(Kinon, Thoma, Betsch & Kotyczka, PAMM 23 (2023), doi 10.1002/pamm.202300144;
+Kinon, Thoma, Betsch & Kotyczka, IFAC-PapersOnLine 58(6) (2024) 101-106, doi 10.1016/j.ifacol.2024.08.264).
 
 State x = (r, v, C) on the reference interval s in [0, L]: position r in R^3,
 velocity v = d_t r (the momentum density is p = rhoA v), and the strain-type
@@ -8,7 +10,7 @@ force n = S d_s r, tension N = |n| = S sqrt(C).
 
     H(x) = int_0^L  1/(2 rhoA) p.p + W(C) ds  (+ 1/2 m_0 |v(0)|^2 + 1/2 m_L |v(L)|^2)
 
-(lumped end masses m_0, m_L >= 0, e.g. the load of a crane).  Seed 003,
+(lumped end masses m_0, m_L >= 0, e.g. the load of a crane).  Kinon et al. (PAMM 2023),
 eq. (4), with p = rhoA v:
 
     d_t r = v,    rhoA d_t v = d_s (S d_s r) + b,    d_t C = 2 d_s r . d_s v,
@@ -16,7 +18,7 @@ eq. (4), with p = rhoA v:
 inputs u = (-n(0, t), n(L, t)) and outputs y = (v(0, t), v(L, t)) (eq. (5)).
 Distributed loads b (gravity rhoA g) are inputs too: a 'domain' `Load` on v,
 with output v and supplied power int b.v ds.  So H here EXCLUDES the
-potential -r.b of seed 003, eq. (3): the work of gravity is booked in the
+potential -r.b of Kinon et al. (PAMM 2023), eq. (3): the work of gravity is booked in the
 supplied work sum h y.u (history column `supplied`), and H - supplied is the
 conserved total energy of a free swing.
 
@@ -28,7 +30,7 @@ t_n -> t_{n+1} = t_n + h, x_m = (x_n + x_{n+1})/2, S_bar = 2 grad_bar W(C_n, C_{
     int [(C_{n+1} - C_n)/h - 2 d_s r_m . d_s v_m] dC                        = 0
 
 The coupling blocks  int S_bar d_s r_m . d_s dv  and  -int 2 d_s r_m . d_s v_m dC
-are the -K(r) and K(r)^T of seed 003, eq. (7): skew-symmetric, with the
+are the -K(r) and K(r)^T of Kinon et al. (PAMM 2023), eq. (7): skew-symmetric, with the
 co-energy S/2 of C (the row of v is the row of p divided by rhoA).
 
 Energy balance.  Test the v-row with dv = v_m and the C-row with dC = S_bar/2.
@@ -50,7 +52,7 @@ matrix), hence C_{n+1} - C_n = 2 d_s r_m . d_s (r_{n+1} - r_n) =
 |d_s r_{n+1}|^2 - |d_s r_n|^2 cellwise: C = |d_s r|^2 stays exact if it holds
 at t = 0 (compatible_strains).
 
-Viscoelasticity (generalized Maxwell, Paper 4; forms/viscoelastic.py):
+Viscoelasticity (generalized Maxwell, Kinon et al., IFAC 2024; forms/viscoelastic.py):
 `branches` = [maxwell(tau_k, EA_k), ...] adds per branch k the branch's
 elastic strain C_k (field "C_k", DG0; C_k = 1 is the relaxed branch, the
 start unless `initial` says otherwise) with the stored energy W_k(C_k)
@@ -61,7 +63,7 @@ stress S_bar + sum_k S_bar_k, and each branch has the row
     int [(C_k,n+1 - C_k,n)/h - 2 d_s r_m . d_s v_m + R_k grad_bar W_k] dC_k = 0   (times tau_k/(tau_k + h)),
     R_k = 4/(tau_k EA_k)  (so that C_k - 1 relaxes as exp(-t/tau_k) near C_k = 1)
 
-(Paper 4's dashpot  d_t C_el = 2 d_s r . d_s v - (2/etaA) W'(C_el)  with
+(the IFAC 2024 paper's dashpot  d_t C_el = 2 d_s r . d_s v - (2/etaA) W'(C_el)  with
 2/etaA = R_k).  Testing it with dC_k = grad_bar W_k (cellwise constant,
 as above) gives
 

@@ -1,7 +1,7 @@
 """Stored energies W(C) of hyperelastic strings: one function per material.
 
 C = d_s r . d_s r (square of the stretch lambda = |d_s r|) is the strain-type
-state of the string (seed 003); the stress quantity is S = 2 W'(C), the
+state of the string (Kinon et al., PAMM 2023); the stress quantity is S = 2 W'(C), the
 contact force n = S d_s r and the tension N = |n| = S lambda = 2 W'(C) sqrt(C).
 
 Every material here has the same small-strain stiffness: near C = 1,
@@ -66,7 +66,7 @@ def kirchhoff(C, EA):
 
 @material
 def logarithmic(C, EA):
-    """The authors' law (Paper 4/5):  W = EA/4 (C - ln C - 1).
+    """The authors' law (Kinon et al., IFAC 2024; PAMM 2023):  W = EA/4 (C - ln C - 1).
 
     S = EA/2 (1 - 1/C),  N = EA/2 (lambda - 1/lambda).  W -> infinity as
     C -> 0 (no collapse to zero length); defined for C > 0 only.

@@ -5,7 +5,7 @@ position-level constraint g(q_a, q_b) = 0, written in forms/joints.py as a
 plain function of the two points' `Frame`s.  With q the configuration
 coordinates of both points (positions, directors, angles), v their
 velocities (the flows paired with q) and lambda the joint's multipliers,
-the joint adds to the step residual (seed 001: index 2, velocity level)
+the joint adds to the step residual (index 2, velocity level, as in Kinon, Morandin & Schulze, Appl. Numer. Math. 2026)
 
     momentum rows of a and b:   + G(q_m)^T lambda          (the reaction forces)
     the joint's own rows:       G(q_m) v_m - (g_p(t_{n+1}) - g_p(t_n))/h = 0

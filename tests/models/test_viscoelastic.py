@@ -238,7 +238,7 @@ def test_relaxation_rod_axial_and_bending():
 
 def test_relaxation_string_logarithmic_and_kirchhoff():
     """A string held at stretch lambda (pinned ends): C_1 relaxes.  Kirchhoff's W is quadratic in C:
-    C_1 - 1 follows the recurrence exactly.  Paper 4's logarithmic W: d_t C_1 = -(1 - 1/C_1)/tau,
+    C_1 - 1 follows the recurrence exactly.  The IFAC 2024 paper's logarithmic W: d_t C_1 = -(1 - 1/C_1)/tau,
     whose solution u = C_1 - 1 is u + ln u = u0 + ln u0 - t/tau."""
     lam, tau, h, n = 1.2, 0.05, 0.005, 40
     for law in (kirchhoff, logarithmic):
