@@ -335,8 +335,11 @@ class System:
     def set_step(self, h: float):
         """The step h of the next steps (every body's h)."""
         self.dt = float(h)
+        if getattr(self, "_h_set", None) == self.dt:   # (every body has it: a step like the last)
+            return
         for r in self.bodies.values():
             r.body.h.value = h
+        self._h_set = self.dt
 
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""

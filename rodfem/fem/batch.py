@@ -50,10 +50,11 @@ class Segments:
     """The owned values of many Functions as segments of one array X: f_k.x.array[:n_k] <-> X[lo_k:lo_k + n_k],
     copied by one C call (`put`: into the Functions, `get`: into X; no ghost update)."""
 
-    def __init__(self, functions, los, lengths, comm):
+    def __init__(self, functions, los, lengths, comm, arrays=None):
+        """(`arrays`: views of float64 arrays instead of the Functions' values.)"""
         self.mod = cbuild.load("rodfem_segments", COPY_SOURCE, COPY_DECL, comm)
-        self._views = [np.asarray(f.x.array) for f in functions]   # (the memory stays where it is)
-        for v in self._views:
+        self._views = arrays if arrays is not None else [np.asarray(f.x.array) for f in functions]
+        for v in self._views:   # (the memory stays where it is)
             assert v.dtype == np.float64 and v.flags.c_contiguous
         self.ptr = np.array([v.ctypes.data for v in self._views], dtype=np.uintp)
         self.off = np.asarray(los, dtype=np.int64)
@@ -208,7 +209,10 @@ class FormBatch:
         constants: rodfem/fem/jit.py) and of the other coefficients' values: `refresh` copies them
         with one call each.  Checked against DOLFINx's packing, else packed body by body."""
         import dolfinx.cpp as cpp
-        self._other_views = [np.asarray(o.x.array) for o in self.others]
+        comm = self.forms[0].mesh.comm
+        views = [np.asarray(o.x.array) for o in self.others]
+        self._other_views = Segments(None, self.size + np.concatenate([[0], np.cumsum([len(v) for v in views])])[:-1],
+                                     [len(v) for v in views], comm, arrays=views) if views else None
         self._const_views = None
         packed = [np.asarray(cpp.fem.pack_constants(f), dtype=np.float64) for f in self.forms]
         self.kstride = len(packed[0])
@@ -217,19 +221,21 @@ class FormBatch:
         if self.kstride and all(hasattr(f, "rodfem_constants") for f in self.forms):
             views = [np.asarray(c.value).reshape(-1) for f in self.forms for c in f.rodfem_constants]
             if sum(v.size for v in views) == self.consts.size and np.array_equal(np.concatenate(views), self.consts):
-                self._const_views = views
+                sizes = [v.size for v in views]
+                self._const_views = Segments(None, np.concatenate([[0], np.cumsum(sizes)])[:-1], sizes, comm,
+                                             arrays=views)
 
     def refresh(self):
         """Read the bodies' constants and the coefficients other than x_{n+1}."""
         if not hasattr(self, "_other_views"):
             self._sources()
-        if self._const_views is not None:
-            np.concatenate(self._const_views, out=self.consts)
+        if self._const_views is not None:   # (one C call: copies of the constants' values)
+            self._const_views.get(self.consts)
         elif self.kstride:
             import dolfinx.cpp as cpp
             self.consts[:] = np.concatenate([cpp.fem.pack_constants(f) for f in self.forms])
-        if self.others:
-            np.concatenate(self._other_views, out=self.S[self.size:])
+        if self._other_views is not None:
+            self._other_views.get(self.S)
 
     def _coefficients(self, X):
         self.S[:self.size] = X

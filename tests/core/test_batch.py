@@ -19,9 +19,9 @@ from rodfem.forms import joints
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
 
 
-def chain(N, total=32, batch=True, sizes=None, comm=MPI.COMM_WORLD):
+def chain(N, total=32, batch=True, sizes=None, comm=MPI.COMM_WORLD, ramp=False):
     """A chain of N steel beams of total length 1 along x, pinned at x = 0 and to each other, falling
-    under gravity (`sizes`: elements per beam; default total / N each)."""
+    under gravity (`sizes`: elements per beam; default total / N each; `ramp`: the weights grow in time)."""
     s = System(comm=comm, batch=batch)
     w, rho, E = 0.01, 7800.0, 2e9
     A, I = w * w, w ** 4 / 12
@@ -30,7 +30,8 @@ def chain(N, total=32, batch=True, sizes=None, comm=MPI.COMM_WORLD):
     prev, x = None, 0.0
     for k, n in enumerate(sizes):
         L = n / sum(sizes)
-        g = Load("v", [0.0, -rho * A * 9.81 * (1 + 0.1 * k)], "domain", f"gravity b{k}")
+        weight = np.array([0.0, -rho * A * 9.81 * (1 + 0.1 * k)])
+        g = Load("v", (lambda t, w=weight: w * (1 + 100 * t)) if ramp else weight, "domain", f"gravity b{k}")
         b = s.add(f"b{k}", model, shape=straight((x, 0.0), (x + L, 0.0)), n_elements=n, loads=[g],
                   supports=[Support("left", "pinned")] if k == 0 else [])
         if prev is not None:
@@ -76,8 +77,9 @@ def test_chain_batched_equals_body_by_body(N):
 
 
 def test_bodies_of_different_sizes_share_a_batch():
-    """Beams of 2, 3, 5 and 6 elements (the same kernels): one batch; the history as body by body."""
-    a, b = histories(lambda: chain(4, sizes=[2, 3, 5, 6]), 1e-3, 3)
+    """Beams of 2, 3, 5 and 6 elements (the same kernels), their weights growing in time (constants
+    that change at every step): one batch; the history as body by body."""
+    a, b = histories(lambda: chain(4, sizes=[2, 3, 5, 6], ramp=True), 1e-3, 3)
     assert [len(bt.blocks) for bt in a[1].assembler.batches] == [4]
     assert_same(a, b)
 
