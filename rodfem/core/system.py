@@ -33,6 +33,7 @@ from rodfem.core.body import Body
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
+from rodfem.core.ports import Load
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
@@ -242,6 +243,9 @@ class System:
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
         self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
+        # the loads whose value can change (not a plain Load given as an array: its constant holds it)
+        self._timed_loads = [load for r in refs for load in r.body.loads
+                             if not (getattr(load, "steady", False) and type(load).update is Load.update)]
         self._ready = True
         return self
 
@@ -344,8 +348,8 @@ class System:
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""
         self.build()
-        for r in self.bodies.values():
-            r.body.set_time(t)
+        for load in self._timed_loads:
+            load.update(t)
 
     def predict(self, previous, ratio=1.0):
         """Newton's start x_{n+1}^0 = x_n + r (x_n - x_{n-1}), r = h_n / h_{n-1} (`ratio`; 2 x_n - x_{n-1}
@@ -557,6 +561,7 @@ class PointIndex:
         # the plain joints' terms as stacked arrays (rodfem/core/joint_batch.py)
         plain = [j for j in self.joints if batchable(j)]
         self.batch = JointBatch(plain, self.fixed) if plain else None
+        self.unbatched = [j for j in self.joints if self.batch is None or not batchable(j)]
         self.x0_values, self.times = None, (0.0, 0.0, 1.0)
 
     def values(self, X):
@@ -626,9 +631,8 @@ class PointIndex:
         if self.comm.rank == 0:
             t1 = self.times[1]
             worst = self.batch.worst_gap(vals, t1) if self.batch is not None else 0.0
-            for j in self.joints:
-                if self.batch is None or not batchable(j):
-                    worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
+            for j in self.unbatched:
+                worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
             obs.update(zip(self.lam_names, vals[self.lam_at].tolist()))   # every joint's multipliers
             if self.joints:
                 obs["constraint_residual"] = worst
