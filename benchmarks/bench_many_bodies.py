@@ -86,9 +86,12 @@ def measure(case, batch, repeats=3):
 
 def child(case, batch, checkout):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([checkout, HERE]), OMP_NUM_THREADS="1")
-    code = (f"import json, sys; sys.path.insert(0, {HERE!r}); from bench_many_bodies import measure; "
+    code = (f"import json, sys; sys.path.insert(1, {HERE!r}); from bench_many_bodies import measure; "
+            "import rodfem; assert rodfem.__file__.startswith(sys.argv[1]), rodfem.__file__; "
             f"print('RESULT', json.dumps(measure({tuple(case)!r}, {batch!r}, {2 if case[1] == 1000 else 3})))")
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    # (run in the checkout: `python -c` puts the working directory first on the path)
+    out = subprocess.run([sys.executable, "-c", code, checkout], env=env, capture_output=True, text=True, check=True,
+                         cwd=checkout)
     return json.loads(next(x for x in out.stdout.splitlines() if x.startswith("RESULT"))[6:])
 
 
