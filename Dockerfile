@@ -25,7 +25,7 @@ COPY demos ./demos
 COPY tests ./tests
 RUN scripts/install-deps \
  && .venv/bin/python scripts/warm-forms \
- && apt-get clean && rm -rf /var/lib/apt/lists/* /tmp/* /root/.cache \
+ && apt-get clean && rm -rf /var/lib/apt/lists/* /usr/share/doc/* /usr/share/man/* /tmp/* /root/.cache \
  && mkdir -p results && chmod -R a+rwX /rodfem/.cache /rodfem/results
 ENV PATH=/rodfem/.venv/bin:$PATH
 CMD ["rodfem", "run", "flying-spaghetti-2d", "--out", "results/flying-spaghetti-2d", "--quiet"]

@@ -126,30 +126,7 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
         H, supplied, dissipated, previous = start.H, start.supplied, start.dissipated, start.previous
 
     def one(h, t, t1, previous, ratio, step):
-        """One ordinary step of size h from x_n at t to t1 (Newton from the predictor, retried from x_n):
-        (iterations, H_{n+1}, h y.u, h d_n), x_{n+1} not accepted."""
-        problem.set_step(h)
-        problem.set_time(t + 0.5 * h)
-        state.solves += 1
-        try:
-            problem.predict(previous, ratio)
-            solve = problem.solve(step, t1)
-        except NewtonFailure as e:
-            state.iterations += e.iterations
-            if previous is None:
-                raise
-            state.solves += 1
-            problem.predict(None)  # retry from x_n
-            try:
-                solve = problem.solve(step, t1)
-            except NewtonFailure as e:
-                state.iterations += e.iterations
-                raise
-        state.iterations += solve.iterations
-        H_new = problem.hamiltonian()
-        if not np.isfinite(H_new):
-            raise NewtonFailure(step, t1, float("nan"), solve.iterations, "non-finite energy")
-        return solve.iterations, H_new, problem.supplied_work(), problem.dissipated_energy() if dissipates else 0.0
+        return attempt(problem, state, h, t, t1, previous, ratio, step, dissipates)
 
     def record(row, n, loop=None):
         """The row of accepted step n; `loop` = (previous, H, supplied, dissipated): a checkpoint may follow."""
@@ -225,6 +202,35 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
         if bar:
             bar.close()
     return res
+
+
+def attempt(problem, state, h, t, t1, previous, ratio, step, dissipates):
+    """One ordinary step of size h of `problem` from x_n at t to t1 (Newton from the predictor
+    x_n + ratio (x_n - previous), retried once from x_n): (iterations, H_{n+1}, h y.u, h d_n), with
+    x_{n+1} not accepted; `state` (StepState) counts the solves and iterations.  The time loop's step
+    and the step interface's (rodfem/app/simulator.py)."""
+    problem.set_step(h)
+    problem.set_time(t + 0.5 * h)
+    state.solves += 1
+    try:
+        problem.predict(previous, ratio)
+        solve = problem.solve(step, t1)
+    except NewtonFailure as e:
+        state.iterations += e.iterations
+        if previous is None:
+            raise
+        state.solves += 1
+        problem.predict(None)  # retry from x_n
+        try:
+            solve = problem.solve(step, t1)
+        except NewtonFailure as e:
+            state.iterations += e.iterations
+            raise
+    state.iterations += solve.iterations
+    H_new = problem.hamiltonian()
+    if not np.isfinite(H_new):
+        raise NewtonFailure(step, t1, float("nan"), solve.iterations, "non-finite energy")
+    return solve.iterations, H_new, problem.supplied_work(), problem.dissipated_energy() if dissipates else 0.0
 
 
 def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, previous, dissipates, bar, sums):

@@ -83,17 +83,19 @@ class Parameter:
             raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value:g})")
 
 
-def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
+def common(n_elements, dt, t_end, integrator="midpoint", frames=101):
     """The parameters every scene has."""
     return [
         Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
         Parameter("dt", dt, "s", "time step h (adaptive=true: the first step)", low=0, low_open=True),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
-        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
-                  "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif) at t_j = j t_end / "
+                  "(frames - 1), t = 0 and t_end included (between two time levels: interpolated; 101: every "
+                  "t_end/100; 1: t_end only; every time level when there are fewer steps)", low=1),
         Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
-                  "(height: half of it; 0: a 25th of the longest body)", low=0),
+                  "(height: half of it; 0: the scene's cross-section if it has one, else a 25th of the "
+                  "longest body)", low=0),
         *stepping(),
     ]
 
