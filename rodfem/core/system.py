@@ -33,7 +33,6 @@ from rodfem.core.body import Body
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
-from rodfem.core.ports import Load
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
@@ -243,9 +242,7 @@ class System:
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
         self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
-        # the loads whose value can change (not a plain Load given as an array: its constant holds it)
-        self._timed_loads = [load for r in refs for load in r.body.loads
-                             if not (getattr(load, "steady", False) and type(load).update is Load.update)]
+        self._loads = [load for r in refs for load in r.body.loads]
         self._ready = True
         return self
 
@@ -348,7 +345,7 @@ class System:
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""
         self.build()
-        for load in self._timed_loads:
+        for load in self._loads:   # (a Load given as an array returns at once)
             load.update(t)
 
     def predict(self, previous, ratio=1.0):
