@@ -17,9 +17,11 @@ RODFEM = os.path.join(BIN, "rodfem")
 
 
 def environment(**extra):
-    """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed."""
+    """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed, and
+    quiet (Open MPI 4's `-q`: no help text after a rank's non-zero exit; Open MPI 5, Debian 13, has
+    neither the option nor the setting and prints its help text)."""
     return dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                OMPI_MCA_rmaps_base_oversubscribe="1", **extra)
+                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_orte_execute_quiet="1", **extra)
 
 
 def signals_as_a_terminal():
@@ -39,7 +41,7 @@ def command(*args, np=None, timeout=600):
     """The argument list of `rodfem ARGS`, under `timeout T mpirun -n np` if np."""
     cmd = [RODFEM, *map(str, args)]
     if np:
-        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n",
+        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
                str(np), *cmd]
     return cmd
 
