@@ -609,6 +609,19 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- DOLFINx versions (rodfem/fem/compat.py, issue 28) ----------------------------------------------
+    M("compat-adjacency-transposed", "rodfem/fem/compat.py",
+      [("return np.asarray(adj.array).reshape(-1, n) if n", "return np.asarray(adj.array).reshape(n, -1).T if n")],
+      ["tests/fem/test_assembly.py::test_fast_assembly_is_dolfinx_assembly",
+       "tests/fem/test_assembly.py::test_linear_time_collapse_is_dolfinx_collapse"],
+      "0.5's cell-to-dof and cell-to-node lists read column by column: each cell gets other cells' dofs"),
+    M("compat-expression-cells-ignored", "rodfem/fem/compat.py",
+      [("    return expr.eval(cells)\n", "    return expr.eval(np.zeros_like(cells))\n"),
+       ("    first = next(iter(inspect.signature(expr.eval).parameters))\n",
+        "    import numpy as np\n    first = next(iter(inspect.signature(expr.eval).parameters))\n")],
+      ["tests/io/test_output.py::test_planar_beam_polyline_surface_strains_and_frames",
+       "tests/io/test_output.py::test_helix_strains_moments_surface_and_no_velocities"],
+      "the output expressions evaluated on the first cell for every cell (0.5 branch of eval_expression)"),
 ]
 
 
