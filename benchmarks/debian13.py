@@ -37,9 +37,12 @@ def rodfem(scene, settings, out):
 
 
 def run(out):
+    before = os.getloadavg()[0]
     for scene, settings in SCENES.items():
         rodfem(scene, settings, os.path.join(out, scene + ".warm"))   # compiles the forms
         rodfem(scene, settings, os.path.join(out, scene))
+    with open(os.path.join(out, "load.json"), "w") as f:   # the machine's load: the times are only as good as it
+        json.dump({"load_before": before, "load_after": os.getloadavg()[0], "cpus": os.cpu_count()}, f)
 
 
 def history(path):
@@ -77,6 +80,11 @@ def compare(a, b, md):
         ta, tb = sa["time_per_step_ms"], sb["time_per_step_ms"]
         lines.append(f"| {scene} | {sa['steps']} | {ta:.2f} | {tb:.2f} | {tb / ta:.2f} | "
                      f"{'yes' if same_its else 'no'} | {worst:.1e} ({name}) | {roundoff:.1e} |")
+    for label, d in (("0.5.2", a), ("0.9", b)):
+        if os.path.exists(os.path.join(d, "load.json")):
+            load = json.load(open(os.path.join(d, "load.json")))
+            lines.append(f"\nLoad average during the {label} run: {load['load_before']:.1f} before, "
+                         f"{load['load_after']:.1f} after, on {load['cpus']} CPUs.")
     text = "\n".join(lines) + "\n"
     print(text)
     if md:
