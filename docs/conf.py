@@ -5,7 +5,7 @@ Build:  .venv/bin/sphinx-build -W -b html docs docs/_build/html   (scripts/insta
 The demos are rendered from their literate source (demos/*.py, prose in comments, code between):
 `jupytext` converts each into a MyST Markdown page under docs/demos/ when the build starts, the way
 DOLFINx renders its own demos.  The pictures a scene's run writes are shown when docs/pictures.py
-has made them (docs/_static/demos/SCENE/*.png).
+has made them (docs/_static/demos/SCENE/: animation.gif, shapes.png, energy.png).
 """
 import pathlib
 import sys
@@ -21,8 +21,10 @@ author = "the rodfem developers"
 copyright = "2026, the rodfem developers"
 from rodfem import __version__ as release  # noqa: E402
 
-extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax", "sphinxarg.ext"]
-myst_enable_extensions = ["dollarmath", "colon_fence"]
+extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinxarg.ext"]
+# Equations are plain text as in the docstrings: no MathJax, which a browser would fetch from the web.
+myst_enable_extensions = ["colon_fence"]
+smartquotes = False                     # `--out` stays two hyphens in prose
 myst_heading_anchors = 4
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 exclude_patterns = ["_build", "Thumbs.db", ".DS_Store"]
@@ -53,7 +55,8 @@ def demo_pages(app):
         while "```\n\n```python\n" in text:                                        # one block per run of code
             text = text.replace("```\n\n```python\n", "\n")
         scene = src.stem.replace("_", "-")
-        pictures = sorted((here / "_static" / "demos" / scene).glob("*.png"))
+        folder = here / "_static" / "demos" / scene
+        pictures = [folder / name for name in ("animation.gif", "shapes.png", "energy.png") if (folder / name).exists()]
         if pictures:
             text += "\n## What a run shows\n\n" + f"`rodfem run {scene}` with its default parameters:\n\n"
             text += "".join(f"![{p.stem}](../_static/demos/{scene}/{p.name})\n\n" for p in pictures)
@@ -65,5 +68,28 @@ def demo_pages(app):
                                   + "\n".join(names) + "\n```\n")
 
 
+def plain_bars(app, what, name, obj, options, lines):
+    """Docstrings are plain text in the papers' notation: norms and absolute values are |x|
+    (never reStructuredText substitutions), and an indented block after a colon is a formula or
+    code shown as written.  So: a colon that opens an indented block opens a literal block, and
+    the bars and the ``**`` (Python's power, keyword arguments) of every other line are escaped (``inline literals`` keep theirs)."""
+    literal_indent = None                      # indentation of the line that opened a literal block
+    for i, line in enumerate(lines):
+        following = next((later for later in lines[i + 1:] if later.strip()), "")
+        opens_block = len(following) - len(following.lstrip()) > len(line) - len(line.lstrip())
+        if literal_indent is None and line.rstrip().endswith(":") and opens_block:
+            line = lines[i] = line.rstrip() + (":" if not line.rstrip().endswith("::") else "")
+        indent = len(line) - len(line.lstrip())
+        if literal_indent is not None and line.strip() and indent <= literal_indent:
+            literal_indent = None
+        if literal_indent is None:
+            parts = line.split("``")
+            parts[::2] = [part.replace("|", "\\|").replace("**", "\\*\\*") for part in parts[::2]]
+            lines[i] = "``".join(parts)
+            if line.rstrip().endswith("::"):
+                literal_indent = indent
+
+
 def setup(app):
     app.connect("builder-inited", demo_pages)
+    app.connect("autodoc-process-docstring", plain_bars)

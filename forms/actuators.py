@@ -466,8 +466,10 @@ def shooting_statics(K_se, K_bt, length, tendons=(), chambers=(), force=(0.0, 0.
 
     An independent check of the finite elements (strong form, composite cuts as in Rucker & Webster):
     cutting rod AND tendons at s, the distal part carries F(s) = force (L - s) and the moment
-    G(s) - r x F with G(s) = int_s^L r x force; the rod's resultants are then
+    G(s) - r x F with G(s) = int_s^L r x force; the rod's resultants are then:
+
         n = F - sum_j tau_j t_j,   m = G - r x F - sum_j (R y_j) x tau_j t_j
+
     (t_j the tendon's unit tangent), solved pointwise for the strains (`pointwise_strains`), and
     r' = R (e_1 + Gamma), R' = R hat(K), G' = -r x force.  The unknown G(0) makes G(L) = 0.
     Returns (s, r(s), R(s)).

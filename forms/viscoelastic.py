@@ -38,7 +38,7 @@ without dashpot (the branch adds its stiffness: the elastic limit with the
 summed stiffness); tau -> 0 relaxes the branch at once (the equilibrium
 branch alone).
 
-Declaring a branch (no engine code involved): each model has a helper,
+Declaring a branch (no engine code involved): each model has a helper:
 
     from rodfem.forms import string, planar_beam, cosserat_rod
     string.String(logarithmic(EA=10), rhoA, branches=[string.maxwell(tau=0.02, EA=10)])

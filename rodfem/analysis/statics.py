@@ -7,7 +7,7 @@ equilibrium at x.  The rows that the time stepping writes in RATE form
 (strains, stresses, velocity-level constraints) are empty at rest; each
 model replaces them by TOTAL-form rows of the configuration
 (``model.static_fields`` names the test fields of those rows,
-``model.static_rows(x, ref, test, dx, ds)`` writes them; see forms/):
+``model.static_rows(x, ref, test, dx, ds)`` writes them; see forms/)::
 
     planar beam   Gamma = Pi(A^T r' - e1),  kappa = Pi(phi')
     string        C = |r'|^2

@@ -13,7 +13,7 @@ exactly (the engine finds the quadratic form by polarization and refuses any oth
 * A `Potential` stores V(q) = psi(xi(q)) for ANY energy psi of the measure (Kinon, Morandin,
   Schulze, "Discrete gradient methods for port-Hamiltonian differential-algebraic equations",
   arXiv 2505.18810: E x' = (J - R) z + B u with z = grad H).  Its force on the momentum rows of
-  the two points is G(q_m)^T z with the co-energy
+  the two points is G(q_m)^T z with the co-energy:
 
       midpoint:           z = psi'(xi(q_m))
       discrete gradient:  z = psi'(xi_m) + [psi(xi_1) - psi(xi_0) - psi'(xi_m).dxi] dxi / |dxi|^2,
