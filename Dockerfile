@@ -1,5 +1,5 @@
-# rodfem in Docker: Debian's FEniCSx (DOLFINx 0.9.0 on Debian 13, 0.5.2 on 12), with the forms of every demo compiled when the image is built
-# (a run starts warm).  From the checkout:
+# rodfem in Docker: Debian's FEniCSx (DOLFINx 0.9.0 on Debian 13, 0.5.2 on 12), with the forms of
+# every demo compiled when the image is built (a run starts warm).  From the checkout:
 #
 #   docker build -t rodfem .                                   # Debian 13; --build-arg DEBIAN=bookworm: 12
 #   mkdir -p results
