@@ -8,6 +8,7 @@ import numpy as np
 from rodfem.app.scene import Parameter, density, stiffness
 from rodfem.errors import ParameterError
 from rodfem.forms.cosserat_rod import CosseratRod
+from rodfem.io.sections import Section
 
 # The soft arm.  Kinon, Eugster & Betsch (2026, example 04) publishes
 # only the arm's length L = 0.1755, the chamber angles and the pressure
@@ -69,7 +70,9 @@ def soft_rod(p, statics):
     K_se, K_bt, rhoA, rhoJ = soft_arm_stiffness(p)
     if statics:
         rhoA, rhoJ = 0.0, (0.0, 0.0, 0.0)
-    return CosseratRod(rhoA, rhoJ, [1 / k for k in K_se], [1 / k for k in K_bt])
+    rod = CosseratRod(rhoA, rhoJ, [1 / k for k in K_se], [1 / k for k in K_bt])
+    rod.section = Section.round(p["R_out"])          # what surface/ and the pictures draw
+    return rod
 
 
 def smoothstep(t, t0, t1):

@@ -10,7 +10,13 @@
 #
 # Statics: set rhoA = rhoI = 0, t_ramp = t_load = t_end (a smooth ramp).
 #
+# Damping (docs/guide/damping.md): tau_kv = eta/E adds Kelvin-Voigt dashpots
+# (viscous stresses tau_kv (EA, GA, EI) times the strain rates: mode k decays
+# with the damping ratio tau_kv omega_k / 2), rayleigh_alpha a force
+# -alpha rho v (ratio alpha / (2 omega_k)).
+#
 # Run it:  rodfem run cantilever-2d --set fy=-10 --out results/cantilever-2d
+#          rodfem run cantilever-2d --set tau_kv=8e-4 --out results/cantilever-2d-damped
 
 import sys
 
@@ -19,6 +25,7 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
+from rodfem.demos._damping import damping_parameters
 from rodfem.demos._planar import beam, material_parameters
 
 parameters = common(n_elements=10, dt=1e-3, t_end=1.0) + material_parameters() + [
@@ -33,7 +40,7 @@ parameters = common(n_elements=10, dt=1e-3, t_end=1.0) + material_parameters() +
     Parameter("fy", -1.0, "N", "tip force, y"),
     Parameter("t_load", 0.25, "s", "the tip force acts for t <= t_load", low=0),
     Parameter("t_ramp", 0.0, "s", "the tip force rises linearly over [0, t_ramp]", low=0),
-]
+] + damping_parameters()
 
 
 def tip_force(p):

@@ -30,6 +30,7 @@ from rodfem.core.system import System
 from rodfem.errors import ParameterError
 from rodfem.forms import joints
 from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
+from rodfem.io.sections import Section
 
 parameters = common(n_elements=6, dt=0.02, t_end=10.0) + [
     stiffness("E", 2.1e11, "Pa", "Young's modulus of crank and rocker"),
@@ -52,8 +53,10 @@ def beam(p, E):
     """A steel beam of the square section: EA, GA = G A (no shear correction), EI, rhoA, rhoI."""
     A, I = p["width"] ** 2, p["width"] ** 4 / 12
     G = E / (2 * (1 + p["nu"]))
-    return PlanarBeam(p["rho"] * A, p["rho"] * I, quadratic(EA=E * A, GA=G * A, EI=E * I),
+    beam = PlanarBeam(p["rho"] * A, p["rho"] * I, quadratic(EA=E * A, GA=G * A, EI=E * I),
                       gauss_points=p["gauss_points"])
+    beam.section = Section.rectangle(p["width"], p["width"])   # what surface/ and the pictures draw
+    return beam
 
 
 def build(p, comm):

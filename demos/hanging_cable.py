@@ -30,8 +30,9 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
+from rodfem.demos._damping import damping
 from rodfem.demos._string_statics import static_equilibrium
-from rodfem.forms.string import MATERIALS, String, map_positions
+from rodfem.forms.string import MATERIALS, String, map_positions, rayleigh
 
 
 # ## Parameters shared by the string scenes
@@ -49,7 +50,9 @@ def material_parameters(material="logarithmic", EA=20.0, rhoA=1.0):
 
 
 def string_model(p, end_masses=None):
-    return String(MATERIALS[p["material"]](EA=p["EA"]), p["rhoA"], end_masses=end_masses)
+    """The String of p (material, EA, rhoA; tau_kv and rayleigh_alpha if the scene has them)."""
+    kv = damping(p, rayleigh, p["EA"]) if "tau_kv" in p else None
+    return String(MATERIALS[p["material"]](EA=p["EA"]), p["rhoA"], end_masses=end_masses, damping=kv)
 
 
 def hanging_guess(p, tip_mass=0.0):

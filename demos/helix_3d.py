@@ -32,6 +32,7 @@ from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
 from rodfem.demos._rod3d import NEWTON, end_moment, smooth_ramp, straight
 from rodfem.forms.cosserat_rod import CosseratRod
+from rodfem.io.sections import Section
 
 R0, HEIGHT, COILS = 10.0, 50.0, 2
 C = HEIGHT / (2 * np.pi * R0 * COILS)
@@ -59,6 +60,7 @@ def build(p, comm):
         C_N[1:] = 0.0
     C_M = np.array([1 / GJ, 1 / EI, 1 / EI]) / scale
     rod = CosseratRod(0.0, (0.0, 0.0, 0.0), C_N, C_M)
+    rod.section = Section.round(radius)              # what surface/ and the pictures draw
     moment = scale * KAPPA * np.array([GJ * C, 0.0, EI])
     d1 = np.array([1.0, 0.0, C]) / np.sqrt(1 + C**2)
     directors = (d1, np.array([0.0, 1.0, 0.0]), np.array([-C, 0.0, 1.0]) / np.sqrt(1 + C**2))

@@ -40,6 +40,11 @@
 # (the damper), and `supplied` (the work of the moving set point; for
 # `controller=law`, all of the controller's work).
 #
+# `controller=external` builds no controller: the hub moment is an input
+# port of the arm (`beam.hub moment`, output omega(0)), zero unless driven,
+# e.g. by the user's own loop through the step interface
+# (rodfem.Simulator, docs/guide/control.md).
+#
 # Run it:  rodfem run robot-arm-control --out results/robot-arm-control
 #          rodfem run robot-arm-control --set controller=law --out results/robot-arm-law
 #          rodfem run robot-arm-control --set controller=pid --out results/robot-arm-pid
@@ -48,7 +53,7 @@ import sys
 
 import numpy as np
 
-from rodfem import Support, System
+from rodfem import Load, Support, System
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 from rodfem.core.joints import ground
@@ -68,8 +73,8 @@ parameters = common(n_elements=8, dt=0.01, t_end=6.0) + [
     Parameter("kp", 20.0, "N m/rad", "proportional gain (stiffness of the virtual spring)", low=0),
     Parameter("kd", 5.0, "N m s/rad", "derivative gain (damping injected at the hub)", low=0),
     Parameter("ki", 0.5, "N m/(rad s)", "integral gain (controller=pid)", low=0),
-    Parameter("controller", "pd", "", "PD as a virtual spring and damper, the same law in Python, or PID",
-              choices=("pd", "law", "pid")),
+    Parameter("controller", "pd", "", "PD as a virtual spring and damper, the same law in Python, PID, or none "
+              "(external: the hub moment is an input port)", choices=("pd", "law", "pid", "external")),
 ]
 
 
@@ -78,8 +83,10 @@ def build(p, comm):
 
     # ## The arm: a straight beam along x, pinned at the hub
     model = PlanarBeam(p["rhoA"], p["rhoI"], quadratic(EA=p["EA"], GA=p["GA"], EI=p["EI"]))
+    external = p["controller"] == "external"     # the hub moment: an input port driven from outside
     beam = arm.add("beam", model, shape=straight((0.0, 0.0), (p["L"], 0.0)), n_elements=p["n_elements"],
-                   supports=[Support("left", "pinned")])
+                   supports=[Support("left", "pinned")],
+                   loads=[Load("omega", 0.0, "left", "hub moment")] if external else ())
 
     # ## The controller at the hub: between the ground's frame and the hub's section angle
     r = rest_to_rest(0.0, p["angle"], 0.0, p["t_move"])
@@ -87,7 +94,7 @@ def build(p, comm):
         arm.connect(pd_control(p["kp"], p["kd"], r), ground((0.0, 0.0)), beam.start, name="hub")
     elif p["controller"] == "pid":
         arm.connect(pid_control(p["kp"], p["ki"], p["kd"], r), ground((0.0, 0.0)), beam.start, name="hub")
-    else:
+    elif p["controller"] == "law":
         def law(t, phi, omega):
             return -p["kp"] * (phi - r(t)) - p["kd"] * omega
         arm.connect(control_law(law), ground((0.0, 0.0)), beam.start, name="hub")

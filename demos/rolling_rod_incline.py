@@ -61,6 +61,7 @@ from rodfem.app.scene import Parameter, Scene, common, stiffness
 from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import Contact, Coulomb, Plane, stiffness_for
+from rodfem.io.sections import Section
 
 parameters = common(n_elements=4, dt=1e-4, t_end=0.5, integrator="discrete-gradient") + [
     Parameter("alpha", 30.0, "deg", "inclination of the plane", low=0, high=89),
@@ -114,6 +115,7 @@ def build(p, comm):
     rhoJ = (rhoA * R**2 / 2, rhoA * R**2 / 4, rhoA * R**2 / 4)
     rod = cosserat_rod.CosseratRod(rhoA, rhoJ, [1 / (E * A), 1 / (G * A), 1 / (G * A)],
                                    [1 / (G * 2 * I), 1 / (E * I), 1 / (E * I)])
+    rod.section = Section.round(R)                   # what surface/ and the pictures draw
     # ## The plane and the rod's start: axis d1 = e_y across the slope, d2 = n, in normal equilibrium
     n, e, gravity = geometry(p)
     k = contact_stiffness(p)

@@ -62,6 +62,7 @@ from rodfem.core.joints import ground
 from rodfem.core.system import System
 from rodfem.forms import joints
 from rodfem.forms.rigid_body import RigidBody
+from rodfem.io.sections import Section
 
 try:
     from rodfem.demos import _slider_crank_reference as exact
@@ -122,16 +123,22 @@ def build(p, comm):
     mechanism = System(integrator=p["integrator"], comm=comm, newton_options=NEWTON)
 
     # ## The bodies: centre of mass, principal axes, and weight as a load on the velocity
-    def add(name, m, J, centre, R):
+    # (`link`: the output draws the crank and the rod as 1 cm bars between their joint points,
+    # not as the boxes of their inertia; the slider stays a block)
+    half_crank, half_rod = 0.5 * L_CRANK, 0.5 * L_ROD
+
+    def add(name, m, J, centre, R, link=None):
         gravity = Load("v", [0.0, 0.0, -m * p["g"]], "domain", f"gravity {name}")
         x0 = RigidBody.initial(centre, R, *v[name])
-        return mechanism.add(name, RigidBody(m, J), loads=[gravity], initial=x0)
-    crank = add("crank", 0.12, (1e-4, 1e-5, 1e-4), 0.5 * (A + B), R_crank)
-    rod = add("rod", 0.5, (4e-4, 4e-3, 4e-3), 0.5 * (B + C), R_rod)
+        model = RigidBody(m, J)
+        if link is not None:
+            model.link, model.section = link, Section.round(0.005)
+        return mechanism.add(name, model, loads=[gravity], initial=x0)
+    crank = add("crank", 0.12, (1e-4, 1e-5, 1e-4), 0.5 * (A + B), R_crank, ((0, -half_crank, 0), (0, half_crank, 0)))
+    rod = add("rod", 0.5, (4e-4, 4e-3, 4e-3), 0.5 * (B + C), R_rod, ((-half_rod, 0, 0), (half_rod, 0, 0)))
     slider = add("slider", 2.0, (1e-4, 1e-4, 1e-4), C, R_slider)
 
     # ## The joints: points in each body's frame (offsets along its directors)
-    half_crank, half_rod = 0.5 * L_CRANK, 0.5 * L_ROD
     mechanism.join(joints.revolute(0), ground(A), crank.point((0.0, -half_crank, 0.0)), name="bearing_A")
     mechanism.join(joints.spherical, crank.point((0.0, half_crank, 0.0)), rod.point((-half_rod, 0.0, 0.0)),
                    name="ball_B")

@@ -32,6 +32,7 @@ import numpy as np
 from rodfem import Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
+from rodfem.demos._damping import damping_parameters
 from rodfem.demos.hanging_cable import material_parameters, string_model
 from rodfem.forms.string import MATERIALS
 
@@ -42,7 +43,7 @@ parameters = common(n_elements=100, dt=2e-3, t_end=0.16, integrator="discrete-gr
     Parameter("amplitude", 1e-3, "m", "height a of the Gaussian pulse"),
     stiffness("width", 0.05, "m", "standard deviation sigma of the pulse (in s)"),
     Parameter("s0", 0.25, "m", "initial centre of the pulse (in s)", low=0),
-]
+] + damping_parameters()
 
 
 def speeds(p):

@@ -41,6 +41,7 @@ from rodfem.app.scene import Parameter, Scene, common, density, stiffness
 from rodfem.demos._rod3d import NEWTON, smooth_ramp, straight
 from rodfem.forms import actuators
 from rodfem.forms.cosserat_rod import CosseratRod
+from rodfem.io.sections import Section
 
 # d1 = e_z (the axis), d2 = e_x, d3 = e_y: tendon i at offset (cos, sin)(i pi/2) in (x, y), as in Till's code
 DIRECTORS = (np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
@@ -76,6 +77,7 @@ def routing(p, i):
 def build(p, comm):
     K_se, K_bt, A = section(p)
     rod = CosseratRod(0.0, (0.0, 0.0, 0.0), [1 / k for k in K_se], [1 / k for k in K_bt])
+    rod.section = Section.round(p["radius"])         # the backbone, drawn in surface/ and the pictures
     loads = [actuators.Tendon(smooth_ramp(p[f"tension{i + 1}"], p["t_end"]), routing(p, i), radius=p["disc_radius"],
                               name=f"tendon{i + 1}") for i in range(4) if p[f"tension{i + 1}"] != 0]
     if p["g"] != 0:

@@ -34,6 +34,7 @@ from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, relaxation_time
 from rodfem.demos import cantilever_2d
+from rodfem.demos._damping import damping
 from rodfem.demos._planar import MATERIALS
 from rodfem.forms import planar_beam
 
@@ -54,10 +55,11 @@ parameters = cantilever_2d.parameters + [
 
 
 def beam(p):
-    """The elastic beam of cantilever-2d plus the Maxwell branch (EA1, GA1, EI1, tau1)."""
+    """The beam of cantilever-2d (with its Kelvin-Voigt / Rayleigh damping, if set) plus the Maxwell branch."""
     W = MATERIALS[p["material"]](p["EA"], p["GA"], p["EI"])
     branch = planar_beam.maxwell(p["tau1"], EA=p["EA1"], GA=p["GA1"], EI=p["EI1"])
-    return planar_beam.PlanarBeam(p["rhoA"], p["rhoI"], W, degree=p["degree"], branches=[branch])
+    kv = damping(p, planar_beam.rayleigh, p["EA"], p["GA"], p["EI"])
+    return planar_beam.PlanarBeam(p["rhoA"], p["rhoI"], W, degree=p["degree"], branches=[branch], damping=kv)
 
 
 def build(p, comm):

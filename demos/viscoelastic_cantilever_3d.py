@@ -30,6 +30,10 @@
 # are this scene's choice (tau1 near 1/omega_1 of the first bending mode,
 # where one branch damps that mode most).
 #
+# Kelvin-Voigt damping instead of (or beside) the branch: tau_kv = eta/E puts
+# dashpots eta_i = tau_kv (GJ, EI, EI) on torsion and bending (docs/guide/
+# damping.md); --set E1=0 --set tau_kv=1e-3 is a Kelvin-Voigt rod.
+#
 # Run it:  rodfem run viscoelastic-cantilever-3d --out results/viscoelastic-cantilever-3d
 #          rodfem run viscoelastic-cantilever-3d --set E1=0 --out results/cantilever-3d-elastic
 
@@ -40,8 +44,10 @@ import numpy as np
 from rodfem import Load, Problem, Support
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, relaxation_time, stiffness
+from rodfem.demos._damping import damping, damping_parameters
 from rodfem.demos._rod3d import NEWTON, end_moment, straight
 from rodfem.forms import cosserat_rod
+from rodfem.io.sections import Section
 
 parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     stiffness("L", 1.0, "m", "length"),
@@ -55,7 +61,7 @@ parameters = common(n_elements=8, dt=1e-3, t_end=0.3) + [
     Parameter("F2", 1.0, "N", "peak tip force on d2 (body frame)"),
     Parameter("F3", 1.0, "N", "peak tip force on d3 (body frame)"),
     stiffness("t_load", 0.05, "s", "the wrench acts for t <= t_load (a sin^2 pulse)"),
-]
+] + damping_parameters()
 
 
 def section(p):
@@ -66,15 +72,18 @@ def section(p):
 
 
 def rod(p):
-    """Inextensible, shear-rigid rod (C_N = 0), elastic in torsion and bending, plus the Maxwell branch."""
+    """Inextensible, shear-rigid rod (C_N = 0), elastic in torsion and bending, plus the Maxwell branch
+    and the Kelvin-Voigt / Rayleigh damping (tau_kv, rayleigh_alpha)."""
     A, I, J, G = section(p)
     branches = []
     if p["E1"] > 0:
         G1 = p["E1"] / (2 * (1 + p["nu"]))
         branches.append(cosserat_rod.maxwell(p["tau1"], C_M=(1 / (G1 * J), 1 / (p["E1"] * I), 1 / (p["E1"] * I))))
-    return cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I),
-                                    C_N=(0.0, 0.0, 0.0), C_M=(1 / (G * J), 1 / (p["E"] * I), 1 / (p["E"] * I)),
-                                    branches=branches)
+    C_N, C_M = (0.0, 0.0, 0.0), (1 / (G * J), 1 / (p["E"] * I), 1 / (p["E"] * I))
+    rod = cosserat_rod.CosseratRod(p["rho"] * A, (p["rho"] * J, p["rho"] * I, p["rho"] * I), C_N=C_N, C_M=C_M,
+                                   branches=branches, damping=damping(p, cosserat_rod.rayleigh, C_N, C_M))
+    rod.section = Section.round(p["radius"])   # what surface/ and the pictures draw
+    return rod
 
 
 def pulse(value, t_load):

@@ -72,7 +72,8 @@ def plain_bars(app, what, name, obj, options, lines):
     """Docstrings are plain text in the papers' notation: norms and absolute values are |x|
     (never reStructuredText substitutions), and an indented block after a colon is a formula or
     code shown as written.  So: a colon that opens an indented block opens a literal block, and
-    the bars and the ``**`` (Python's power, keyword arguments) of every other line are escaped (``inline literals`` keep theirs)."""
+    the bars and the ``**`` (Python's power, keyword arguments) of every other line are escaped
+    (``inline literals`` keep theirs)."""
     literal_indent = None                      # indentation of the line that opened a literal block
     for i, line in enumerate(lines):
         following = next((later for later in lines[i + 1:] if later.strip()), "")

@@ -117,6 +117,27 @@ multiplier): the branch rows do not care.  A branch on N is pointless for an
 inextensible, shear-rigid rod (its strain rate is zero, N_k stays 0): give
 it C_M only.
 
+Kelvin-Voigt and Rayleigh damping (forms/damping.py): `damping` = kelvin_voigt(tau_d, C_N, C_M)
+(viscosities D_N = tau_d C_N^-1, D_M = tau_d C_M^-1 componentwise, none where a compliance is 0),
+rayleigh(alpha, beta, C_N, C_M) or damping.KelvinVoigt([6 viscosities], alpha) adds to the resultants
+of the momentum rows (not of the compliance rows) the viscous stresses of the step's strain rates
+as the compliance rows give them, the midpoint rates projected on DG1 (Pi) like the stresses:
+
+    N_v = D_N e_N,  M_v = D_M e_M,   (e_N, e_M) = Pi (R^T d_s v + J_N^T v_d, J_K v_d)_m
+                                    = (C_N d_t N, C_M d_t M)   (linear; dW*/d(N, M) at (d_t N, d_t M)
+                                      for a quadratic W*; (d_t gamma, d_t kappa) for any other),
+
+and the forces alpha (rhoA v, m_i w_i)_m (Rayleigh's mass part): R = B^* Pi^* D Pi B >= 0 on the
+velocity efforts.  Testing the momentum rows with (v_m, w_m) and the compliance rows with (N_v, M_v)
+(DG1 fields) gives, for both rules,
+
+    H_{n+1} - H_n = -h d_n + h y.u,
+    h d_n = h int e_N.D_N e_N + e_M.D_M e_M + alpha (rhoA |v|^2 + sum m_i |w_i|^2)_m ds >= 0.
+
+A constrained strain (zero compliance) has e = 0: no dashpot.  Soromox (github.com/tud-phi/soromox)
+writes D = eta diag(J, 3I, 3I, 3A, A, A) (torsion, bending, axial, shear) for an incompressible
+material (E = 3G): our D with tau_d = eta/G.  Zero damping builds nothing.
+
 Ports: a spatial moment m acts on the directors through
 <m, 1/2 sum_i d_i x w_i> (= m . omega, see `spatial_moment`); a body-fixed
 moment M_B is m = sum_i M_B,i d_i (`body_moment`).  A force pairs with v.
@@ -127,6 +148,8 @@ import ufl
 from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
+from rodfem.errors import ParameterError
+from rodfem.forms import damping as kv
 from rodfem.forms.rod_materials import COMPLIANCES, RodMaterial
 from rodfem.forms.viscoelastic import Maxwell, active, row_scale
 
@@ -231,6 +254,25 @@ def maxwell(tau, C_N=None, C_M=None):
     return Maxwell(tau, parts, stiffness, name="maxwell")
 
 
+def _stiffnesses(C_N, C_M):
+    """1/C per component (inf for a zero compliance: a constrained strain gets no dashpot)."""
+    C = np.concatenate([np.asarray(C_N, dtype=float), np.asarray(C_M, dtype=float)])
+    if C.shape != (6,) or np.any(C < 0) or not np.all(np.isfinite(C)):
+        raise ParameterError(f"damping: C_N, C_M must be three compliances >= 0 each (got {C_N!r}, {C_M!r})")
+    return np.where(C > 0, 1.0 / np.where(C > 0, C, 1.0), np.inf)
+
+
+def kelvin_voigt(tau, C_N, C_M):
+    """Kelvin-Voigt damping with retardation time tau = eta/E >= 0: viscosities tau/C_N, tau/C_M
+    (N_v = tau C_N^-1 Gamma_dot, M_v = tau C_M^-1 K_dot; none where a compliance is 0)."""
+    return kv.retardation(tau, _stiffnesses(C_N, C_M))
+
+
+def rayleigh(alpha, beta, C_N, C_M):
+    """Rayleigh damping alpha M + beta K: mass-proportional rate alpha, viscosities beta/C_N, beta/C_M."""
+    return kv.retardation(beta, _stiffnesses(C_N, C_M), alpha=alpha)
+
+
 class CosseratRod:
     """Director-based Cosserat rod: line density rhoA, rotary inertia rhoJ = (rhoJ_1, rhoJ_2, rhoJ_3)
     about (d1, d2, d3), compliances C_N = (C_N1, C_N2, C_N3) and C_M = (C_M1, C_M2, C_M3) (entries >= 0),
@@ -247,10 +289,12 @@ class CosseratRod:
               **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
               "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij "
                       "(reactions to them)", tuple(f"{i + 1}{j + 1}" for i, j in PAIRS)),
-              "Gamma": ("strains Gamma_i = d_i . d_s r - delta_i1 of the configuration "
-                        "(C_N N = Gamma - Gamma at rest)", ("axial", "shear2", "shear3")),
-              "K": ("curvatures K_i = 1/2 eps_ijk d_s d_j . d_k of the configuration: torsion, bending "
-                    "about d2, d3 (C_M M = K - K at rest)", ("torsion", "bend2", "bend3")),
+              "strain_from_N": ("strains C_N N from the stress-free reference: axial strain, shear strains "
+                                "(= Pi(Gamma(q)) - Pi(Gamma(q_ref)), Gamma_i = d_i . d_s r - delta_i1)",
+                                ("axial", "shear2", "shear3")),
+              "strain_from_M": ("curvatures C_M M from the stress-free reference: torsion, bending about d2, d3 "
+                                "(= Pi(K(q)) - Pi(K(q_ref)), K_i = 1/2 eps_ijk d_s d_j . d_k)",
+                                ("torsion", "bend2", "bend3")),
               "N": ("stress resultants N on (d1, d2, d3): axial and shear forces (the state's field)",
                     ("axial", "shear2", "shear3")),
               "M": ("moments M on (d1, d2, d3): torsion and bending moments (the state's field)",
@@ -260,7 +304,12 @@ class CosseratRod:
               "kappa": ("curvatures kappa = dW*/dM from the stress-free reference (the state's field; "
                         "non-quadratic materials only)", ("torsion", "bend2", "bend3"))}
 
-    def __init__(self, rhoA, rhoJ, C_N=None, C_M=None, branches=(), material=None):
+    # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
+    units = {"r": "m", **{d: "1" for d in DIRECTORS}, "v": "m/s", **{w: "1/s" for w in RATES},
+             "lam": "N", "strain_from_N": "1", "strain_from_M": "1/m", "gamma": "1", "kappa": "1/m",
+             "N": "N", "M": "N m"}
+
+    def __init__(self, rhoA, rhoJ, C_N=None, C_M=None, branches=(), material=None, damping=None):
         self.rhoA = float(rhoA)
         if not self.rhoA >= 0:  # also NaN
             raise ValueError(f"CosseratRod: rhoA must be a number >= 0 (got {rhoA!r})")
@@ -294,6 +343,7 @@ class CosseratRod:
         if self.general:   # the strains conjugate to N, M (module docstring: non-quadratic materials)
             self.fields += [Field("gamma", "DG", 1, v3), Field("kappa", "DG", 1, v3)]
             self.dg_weights = ParameterSet(**{f"w{i}": w for i, w in enumerate(material.weights())})
+        self.damping = kv.checked(damping, 6)   # None: no damping (nothing built)
         # Maxwell branches: their stress resultants are internal variables, their
         # compliances and 1/tau run-time constants
         self.branches = active(branches)
@@ -374,6 +424,13 @@ class CosseratRod:
                 M = M + step.mid(field)
         dv, dN, dM, dlam = test["v"], test["N"], test["M"], test["lam"]
         dw = [test[n] for n in RATES]
+        mass_damping = None
+        if self.damping is not None:   # Kelvin-Voigt: viscous resultants in the momentum rows only
+            Nv, Mv, _, alpha = self._viscous(step, dx.ufl_domain())
+            N, M = N + Nv, M + Mv
+            if alpha is not None:
+                mass_damping = alpha * (rhoA * ufl.inner(v, dv)
+                                        + sum(m * ufl.inner(wi, dwi) for m, wi, dwi in zip(masses, w, dw))) * dx
         # kinematics d_t q = v (nodal: lumped on the GLL rule)
         F = sum(ufl.inner(step.rate(q) - step.mid(p), test[q])
                 for q, p in zip(("r", *DIRECTORS), ("v", *RATES))) * dxG
@@ -404,14 +461,37 @@ class CosseratRod:
             rate = gamma_rate if field.startswith("N") else curvature_rate(d, w)
             F += row_scale(step, inv_tau) * ufl.inner(C * (step.rate(field) + inv_tau * step.mid(field)) - rate,
                                                       test[field]) * dx
+        if mass_damping is not None:
+            F += mass_damping
         return F
 
+    def _strain_rates(self, step, domain):
+        """(e_N, e_M) = Pi (R^T v' + J_N^T v_d, J_K v_d)_m, the strain rates of the compliance rows."""
+        if self.general:
+            return step.rate("gamma"), step.rate("kappa")
+        return self._compliance_rows(step.rate("N"), step.rate("M"), domain)
+
+    def _viscous(self, step, domain):
+        """(N_v, M_v, (e_N, e_M), alpha): the Kelvin-Voigt resultants D (e_N, e_M), the strain rates,
+        the mass rate (None if 0)."""
+        eN, eM = self._strain_rates(step, domain)
+        s = kv.viscous(self.damping.eta(domain), [eN[i] for i in range(3)] + [eM[i] for i in range(3)])
+        return ufl.as_vector(s[:3]), ufl.as_vector(s[3:]), (eN, eM), self.damping.mass_rate(domain)
+
     def dissipation(self, step, dx, ds):
-        """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k ds (None without branches)."""
-        if not self.branches:
+        """h d_n = h int sum_k (N_k.C_Nk N_k + M_k.C_Mk M_k)_m / tau_k + N_v.Gamma_dot + M_v.K_dot
+        + alpha (rhoA |v|^2 + sum m_i |w_i|^2)_m ds (None without branches and damping)."""
+        if not self.branches and self.damping is None:
             return None
         terms = [inv_tau * ufl.inner(step.mid(f), C * step.mid(f))
                  for f, C, inv_tau in self._branch_terms(dx.ufl_domain())]
+        if self.damping is not None:
+            Nv, Mv, (eN, eM), alpha = self._viscous(step, dx.ufl_domain())
+            terms.append(ufl.inner(Nv, eN) + ufl.inner(Mv, eM))
+            if alpha is not None:
+                rhoA, masses, _, _ = self._constants(dx.ufl_domain())
+                v, w = step.mid("v"), [step.mid(n) for n in RATES]
+                terms.append(alpha * (rhoA * ufl.inner(v, v) + sum(m * ufl.inner(wi, wi) for m, wi in zip(masses, w))))
         return step.h * sum(terms[1:], terms[0]) * dx
 
     @property
@@ -425,16 +505,27 @@ class CosseratRod:
         return np.stack([np.asarray(q[n], dtype=float).reshape(-1, 3) for n in DIRECTORS], axis=-1)
 
     def outputs(self, x):
-        """Strains Gamma, K of the configuration and the stress resultants N, M (UFL): the equilibrium
-        branch's plus every Maxwell branch's (parallel branches: the stresses add)."""
-        d = [x[n] for n in DIRECTORS]
+        """The model's strains and the stress resultants N, M (UFL).
+
+        The strains are those the stress resultants carry: strain_from_N = C_N N and strain_from_M =
+        C_M M (dW*/d(N, M) at the state of a quadratic material), the strains from the stress-free
+        reference; for any other material the state's strain fields gamma, kappa (module docstring).
+        They are DG1 like N and M (the configuration's Gamma(q), K(q), cubic and quadratic on a cell,
+        meet them only in the L2 projection Pi, so their nodal values oscillate from node to node).
+        N, M: the equilibrium branch's plus every Maxwell branch's (parallel branches: the stresses
+        add); the strains are the equilibrium branch's (every branch sees the rod's strain)."""
+        if self.general:
+            strains = {"gamma": x["gamma"], "kappa": x["kappa"]}
+        else:
+            CN, CM = self._compliance_rows(x["N"], x["M"], ufl.domain.extract_unique_domain(x["N"]))
+            strains = {"strain_from_N": CN, "strain_from_M": CM}
         N, M = x["N"], x["M"]
         for field in (f.name for f in self.fields):
             if field.startswith("N_"):
                 N = N + x[field]
             elif field.startswith("M_"):
                 M = M + x[field]
-        return {"Gamma": shear_strain(x["r"], d) - ufl.as_vector([1.0, 0.0, 0.0]), "K": curvature(d), "N": N, "M": M}
+        return {**strains, "N": N, "M": M}
 
     def compatible_strains(self, x):
         """None: N = M = 0 is the stress-free reference state (straight or curved); the rate form needs no Gamma^0, K^0."""

@@ -39,6 +39,7 @@ class PointMass:
     position = "x"
     kinematics = {"x": "v"}
     labels = {"v": ("velocity of the point mass", ("x", "y", "z"))}
+    units = {"x": "m", "v": "m/s"}   # SI
     supports = {}
     quadrature_degree = 0
 
@@ -99,6 +100,7 @@ class PlanarRigidBody:
     kinematics = {"x": "v", "phi": "omega"}
     labels = {"phi": ("angle of the body (rad)", ()), "v": ("velocity of the centre of mass", ("x", "y")),
               "omega": ("angular velocity d_t phi", ())}
+    units = {"x": "m", "phi": "rad", "v": "m/s", "omega": "rad/s"}   # SI
     supports = {}
     quadrature_degree = 0
 
@@ -160,6 +162,7 @@ class RigidBody:
               **{w: (f"director rate {w} = d_t d{w[1]}", ("x", "y", "z")) for w in RATES},
               "lam": ("multipliers lambda_ij of the orthonormality constraints d_i . d_j = delta_ij",
                       ("11", "22", "33", "12", "13", "23"))}
+    units = {"x": "m", **{d: "1" for d in DIRECTORS}, "v": "m/s", **{w: "1/s" for w in RATES}, "lam": "J"}   # SI
     supports = {}
     quadrature_degree = 0
     frame = staticmethod(lambda q, offset=(): director_frame(q, "x", offset))

@@ -71,6 +71,16 @@ as above) gives
 
 exactly for any W_k with the discrete gradient (`dissipation`).
 
+Kelvin-Voigt and Rayleigh damping (forms/damping.py): `damping` = kelvin_voigt(tau_d, EA) or
+rayleigh(alpha, beta, EA) adds to the stress of the v-row the viscous stress of the rate of the
+Green-Lagrange strain E = (C - 1)/2, d_t E = d_s r . d_s v (not to the C-row):
+
+    S_v = eta (d_s r . d_s v)_m,       eta = tau_d EA   (tension eta d_t eps at small strain),
+
+and the forces alpha rhoA v_m (and alpha m v_m at the end masses: Rayleigh's mass part).  Testing
+with v_m: H_{n+1} - H_n = -h d_n + h y.u, h d_n = h int eta (d_s r . d_s v)_m^2 + alpha rhoA |v_m|^2 ds
+(+ the ends).  Zero damping builds nothing.
+
 Supports: 'pinned' fixes r and v at an end; 'fix-x', 'fix-y', 'fix-z' fix one
 component (e.g. a crane trolley on a horizontal rail: 'fix-z' with z up).
 """
@@ -81,6 +91,7 @@ from rodfem.core.joints import Frame
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
+from rodfem.forms import damping as kv
 from rodfem.forms.string_materials import MATERIALS, Material, logarithmic  # noqa: F401  (re-exported)
 from rodfem.forms.viscoelastic import Maxwell, active
 
@@ -90,6 +101,16 @@ def maxwell(tau, EA, law=logarithmic):
     stiffness EA >= 0; EA = 0: no branch) in series with a dashpot of relaxation time tau."""
     spring = law(EA=EA) if EA > 0 else None
     return Maxwell(tau, spring, [EA / 4.0], name="maxwell")   # W''(1) = EA/4: the stiffness in C
+
+
+def kelvin_voigt(tau, EA):
+    """Kelvin-Voigt damping with retardation time tau = eta/E >= 0: viscosity tau EA."""
+    return kv.retardation(tau, [EA])
+
+
+def rayleigh(alpha, beta, EA):
+    """Rayleigh damping alpha M + beta K: mass-proportional rate alpha, viscosity beta EA."""
+    return kv.retardation(beta, [EA], alpha=alpha)
 
 
 class String:
@@ -113,7 +134,9 @@ class String:
               "stretch": ("stretch sqrt(C) = |d_s r|", ()),
               "tension": ("tension N = 2 W'(C) sqrt(C) = |contact force|", ())}
 
-    def __init__(self, material, rhoA, end_masses=None, branches=()):
+    units = {"r": "m", "v": "m/s", "C": "1", "stretch": "1", "tension": "N"}   # SI; "1": dimensionless
+
+    def __init__(self, material, rhoA, end_masses=None, branches=(), damping=None):
         if not isinstance(material, Material):
             raise TypeError("material must be a Material, e.g. string_materials.logarithmic(EA=20)")
         if not (np.isfinite(rhoA) and rhoA > 0):
@@ -126,6 +149,7 @@ class String:
         # The numbers enter the forms as fem.Constants (one set per mesh, like the
         # material's parameters), so a new EA, rhoA or end mass does not recompile.
         self.parameters = ParameterSet(rhoA=self.rhoA, **{"m_" + e: m for e, m in self.end_masses.items()})
+        self.damping = kv.checked(damping, 1)   # None: no damping (nothing built)
         # Maxwell branches with stiffness: their strains C_k are internal variables
         self.branches = active(branches)
         if self.branches:
@@ -164,6 +188,9 @@ class String:
         branches = self._branch_efforts(step, dom)
         for Wk, _ in branches:   # parallel branches: the stresses add
             S = S + 2 * Wk
+        if self.damping is not None:   # Kelvin-Voigt: the viscous stress in the v-row only
+            Sv, _ = self._viscous(step, dom)
+            S = S + Sv
         F = (ufl.inner(step.rate("r") - v, dr)
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC) * dx
@@ -171,8 +198,19 @@ class String:
             # d_t C_k = 2 d_s r . d_s v - R_k grad_bar W_k, scaled by tau_k/(tau_k + h)
             row = step.rate(f"C_{k}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
             F += b.row_scale(step, dom) * row * test[f"C_{k}"] * dx
+        if self.damping is not None and self.damping.alpha > 0:   # Rayleigh's mass part
+            alpha = self.damping.mass_rate(dom)
+            F += alpha * self.constants(dom)["rhoA"] * ufl.inner(v, dv) * dx
+            ends_v = self._lumped(ds, alpha * ufl.inner(v, dv))
+            F = F + ends_v if ends_v is not None else F
         ends = self._lumped(ds, ufl.inner(step.rate("v"), dv))
         return F + ends if ends is not None else F
+
+    def _viscous(self, step, domain):
+        """(S_v, d_t E): the Kelvin-Voigt stress eta d_t E of d_t E = (d_s r . d_s v)_m (S_v = 0 if eta = 0)."""
+        Edot = ufl.inner(step.mid("r").dx(0), step.mid("v").dx(0))
+        (Sv,) = kv.viscous(self.damping.eta(domain), [Edot])
+        return Sv, Edot
 
     def _branch_efforts(self, step, domain):
         """[(grad_bar W_k, R_k)] of the Maxwell branches."""
@@ -183,10 +221,24 @@ class String:
         return out
 
     def dissipation(self, step, dx, ds):
-        """h d_n = h int sum_k R_k (grad_bar W_k)^2 ds (None without branches)."""
-        if not self.branches:
+        """h d_n = h int sum_k R_k (grad_bar W_k)^2 + S_v d_t E + alpha rhoA |v_m|^2 ds + alpha m |v_m|^2 at
+        the ends (None without branches and damping)."""
+        if not self.branches and self.damping is None:
             return None
-        return step.h * sum(R * Wk ** 2 for Wk, R in self._branch_efforts(step, dx.ufl_domain())) * dx
+        dom = dx.ufl_domain()
+        d = sum(R * Wk ** 2 for Wk, R in self._branch_efforts(step, dom))
+        if self.damping is None:
+            return step.h * d * dx
+        Sv, Edot = self._viscous(step, dom)
+        d = d + Sv * Edot
+        v = step.mid("v")
+        if self.damping.alpha > 0:
+            alpha = self.damping.mass_rate(dom)
+            d = d + alpha * self.constants(dom)["rhoA"] * ufl.inner(v, v)
+            ends = self._lumped(ds, alpha * ufl.inner(v, v))
+            if ends is not None:
+                return step.h * d * dx + step.h * ends
+        return step.h * d * dx
 
     def compatible_strains(self, x):
         """C = d_s r . d_s r; Maxwell branches relaxed, C_k = 1."""

@@ -149,6 +149,9 @@ class Linearization:
         if problem.comm.size > 1:
             raise ParameterError("linearize and modes run on one process (no mpirun)")
         refuse_servos(problem, "linearize and modes")
+        if getattr(problem, "contacts", None):
+            raise ParameterError("linearize and modes do not take contact between bodies "
+                                 f"({', '.join(c[3] for c in problem.contacts)}): its penalty is not smooth at rest")
         self.problem = problem
         self.system = problem.named_bodies
         problem.build()

@@ -43,9 +43,10 @@ from dolfinx import fem
 
 from rodfem.common import interrupts
 from rodfem.common.limits import check_load_steps
+from rodfem.core.bodycontact import BodyContacts, fixed_dofs
 from rodfem.core.integrators import Step, flatten, unflatten
 from rodfem.core.servo import Servo
-from rodfem.core.system import JointRows
+from rodfem.core.system import Couplings, JointRows
 from rodfem.errors import NewtonFailure, ParameterError
 from rodfem.fem.assembly import BlockAssembler, BodyBlock
 from rodfem.fem.jit import compile_forms
@@ -167,7 +168,13 @@ class Statics:
         blocks = [BodyBlock(compiled[(name, "F")], compiled[(name, "J")], body.x1, body.bcs)
                   for name, body in self.bodies]
         self.joint_rows = StaticJointRows(target.points) if (target.joints or getattr(target, "components", None)) else None
-        self.assembler = BlockAssembler(target.layout, blocks, self.joint_rows)
+        # contact between bodies at rest: the force grad V(x) of the iterate (rodfem/core/bodycontact.py)
+        contacts = (BodyContacts(target.contacts, [r for r in target.bodies.values()], target.layout,
+                                 fixed_dofs(target, target.layout), target.layout.create_vector(), rest=True)
+                    if getattr(target, "contacts", None) else None)
+        parts = [c for c in (self.joint_rows, contacts) if c is not None]
+        self.assembler = BlockAssembler(target.layout, blocks, (parts[0] if len(parts) == 1 else Couplings(parts))
+                                        if parts else None)
         self.newton = Newton(assembler=self.assembler, options=dict(OPTIONS, **(options or {})), prefix=PREFIX)
         self.unknown = self.assembler.vector
 

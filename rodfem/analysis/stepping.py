@@ -17,18 +17,26 @@ keeps the energy balance H_{n+1} - H_n = -h_n d_n + h_n y.u with its own h_n:
 
       err = max over fields f of  max_i |e_i| / (atol + rtol max(|x_n|_inf,f, |x_{n+1}|_inf,f))  (* T / h)
 
-  (the multipliers, algebraic, left out).  err <= 1 accepts the pair, err > 1 rejects it; the next
-  h is h min(5, max(0.2, 0.9 err^(-1/(p+1)))) (per unit step err^(-1/p); no growth right after a
-  rejection).  Measured on the linear oscillator (two periods, rtol = 1e-2 ... 1e-6): per step the
-  global error grows from 2.7 to 68 rtol |x|, per unit step it is 0.24 rtol |x| throughout, at 5 to
-  22 times the steps.  Per unit step is not the default: where a field starts at zero (a body at
-  rest) its error is measured against atol, and Newton's tolerance (1e-10) times T/h then keeps
-  err > 1 however small h gets (flying-spaghetti-3d stopped at h = 1e-8); on the robot arm it took
-  74 182 steps at rtol = 1e-3 against 2258 per step (benchmarks/stepping.md).  A Newton failure
-  is a rejection with h/4.  The steps land exactly on the output times (the frames: `frames`
-  evenly spaced times with t = 0 and t_end).  Below `dt_min` (default 1e-9 t_end) the run ends
-  with exit 3.  The inputs u(t) are read at each step's midpoint: a variable h samples them at
-  other times than a fixed one.
+  (the multipliers, algebraic, left out; the velocities of a body with multipliers or a joint's point,
+  index-2 variables with an undamped (-1)^n mode of the midpoint rule's constraint rows, measured by the
+  displacement h e_v against their configuration's size: `System.field_groups`).  err <= 1 accepts the
+  pair, err > 1 rejects it; the next h is h min(5, max(0.2, 0.9 err^(-1/(p+1)))) (per unit step
+  err^(-1/p); no growth right after a rejection).  Measured on the linear oscillator (two periods, rtol =
+  1e-2 ... 1e-6): per step the global error grows from 2.7 to 68 rtol |x|, per unit step it is 0.24 rtol
+  |x| throughout, at 5 to 22 times the steps.  Per unit step is not the default: where a field starts at
+  zero (a body at rest) its error is measured against atol, and Newton's tolerance (1e-10) times T/h then
+  keeps err > 1 however small h gets (flying-spaghetti-3d stopped at h = 1e-8); on the robot arm it took
+  74 182 steps at rtol = 1e-3 against 2258 per step (benchmarks/stepping.md).  A Newton failure is a
+  rejection with h/4.  The steps land exactly on the output times (the frames: `frames` evenly spaced
+  times with t = 0 and t_end).  Below `dt_min` (default 1e-9 t_end) the run ends with exit 3.  The inputs
+  u(t) are read at each step's midpoint: a variable h samples them at other times than a fixed one.
+
+``dt=auto`` (``run(problem, "auto", t_end, control=StepControl(adaptive=True, ...))``): an adaptive run
+whose first step is the scene's time scale as its outputs resolve it, the first interval between output
+times (the frames; t_end - t with none), at most (t_end - t)/10; until a step is accepted a rejection
+shrinks it by 0.9 err^(-1/(p+1)) with the floor 1e-3 instead of 0.2 (the first step sized by its own
+Richardson estimate, as Hairer, Norsett & Wanner, Solving Ordinary Differential Equations I, sec. II.4,
+size theirs by an explicit one); a Newton failure quarters it as for any step.
 
 Why step doubling and not the free estimate from the predictor: measured in benchmarks/stepping.md.
 """
@@ -40,6 +48,8 @@ from mpi4py import MPI
 
 ORDER = 2            # the midpoint rule and the discrete gradient are of second order
 SAFETY, GROW, SHRINK, FAILED = 0.9, 5.0, 0.2, 0.25
+FIRST_SHRINK = 1e-3  # dt=auto: the floor of a rejection's shrinking until a step is accepted
+AUTO = "auto"
 SPLIT_MAX = 1024     # fixed steps: dt_min = dt / SPLIT_MAX unless given
 ADAPTIVE_MIN = 1e-9  # adaptive: dt_min = ADAPTIVE_MIN t_end unless given
 
@@ -99,11 +109,18 @@ def next_step(h, err, after_reject, per_unit_step=False):
     return h * (min(fac, 1.0) if after_reject else fac)
 
 
-def shrunk(h, err, per_unit_step=False):
-    """The step to retry after a rejected step h with error `err` > 1 (inf: a Newton failure)."""
+def shrunk(h, err, per_unit_step=False, floor=SHRINK):
+    """The step to retry after a rejected step h with error `err` > 1 (inf: a Newton failure); `floor`: the
+    smallest factor (FIRST_SHRINK for the first step of dt=auto)."""
     if not math.isfinite(err):
         return FAILED * h
-    return h * max(SHRINK, min(1.0, SAFETY * err ** -exponent(per_unit_step)))
+    return h * max(floor, min(1.0, SAFETY * err ** -exponent(per_unit_step)))
+
+
+def first_step(t, t_end, output_times=()):
+    """dt=auto: the first interval between the output times after t (t_end - t with none), at most (t_end - t)/10."""
+    later = sorted(x for x in output_times if t < x < t_end) + [t_end]
+    return min(later[0] - t, 0.1 * (t_end - t))
 
 
 class ErrorNorm:
@@ -115,12 +132,16 @@ class ErrorNorm:
 
     def __call__(self, x0, x1, x_coarse, h):
         diff, size = np.zeros(len(self.groups)), np.zeros(len(self.groups))
-        for k, idx in enumerate(self.groups):
+        scaled = np.array([paired is not None for _, paired in self.groups], dtype=bool)
+        for k, (idx, paired) in enumerate(self.groups):
             if len(idx):
                 diff[k] = np.max(np.abs(x1[idx] - x_coarse[idx]))
-                size[k] = max(np.max(np.abs(x0[idx])), np.max(np.abs(x1[idx])))
+            against = idx if paired is None else paired   # an index-2 velocity: h e_v against its configuration
+            if len(against):
+                size[k] = max(np.max(np.abs(x0[against])), np.max(np.abs(x1[against])))
         self.comm.Allreduce(MPI.IN_PLACE, diff, op=MPI.MAX)
         self.comm.Allreduce(MPI.IN_PLACE, size, op=MPI.MAX)
+        diff[scaled] *= h
         e = diff / (2 ** ORDER - 1) / (self.atol + self.rtol * size) * (self.span / h if self.span else 1.0)
         if not np.all(np.isfinite(e)):
             return math.inf

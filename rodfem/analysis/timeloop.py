@@ -19,7 +19,18 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from rodfem.analysis.stepping import FAILED, ErrorNorm, StepControl, StepState, next_step, shrunk
+from rodfem.analysis.stepping import (
+    AUTO,
+    FAILED,
+    FIRST_SHRINK,
+    SHRINK,
+    ErrorNorm,
+    StepControl,
+    StepState,
+    first_step,
+    next_step,
+    shrunk,
+)
 from rodfem.common import interrupts
 from rodfem.common.limits import check_steps, shown
 from rodfem.core.model import SteppedSystem
@@ -69,7 +80,8 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
 
     `control` (rodfem/analysis/stepping.py): fixed steps dt (the default), a step whose Newton
     fails split into 2, 4, ... sub-steps down to `control.dt_min`; or adaptive steps (dt the
-    first one) to the tolerances rtol, atol, landing on `control.output_times`.
+    first one; dt = "auto": chosen by the rule of `stepping.first_step`) to the tolerances rtol,
+    atol, landing on `control.output_times`.
 
     Restart (rodfem/io/checkpoint.py): `start` (with .step, .t = problem.t, .H, .supplied,
     .dissipated, .previous, .stepping) continues a run whose state x_n at step n = `start.step`
@@ -89,6 +101,11 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
     if not t_end > t_start:
         raise ValueError(f"t_end = {t_end:g} is not after the problem's time t = {t_start:g} "
                          f"(run continues from where the last run stopped)")
+    auto = isinstance(dt, str) and dt == AUTO and start is None
+    if isinstance(dt, str) and dt == AUTO:
+        if not control.adaptive:
+            raise ValueError("dt = auto needs adaptive steps (control=StepControl(adaptive=True, ...))")
+        dt = first_step(t_start, t_end, control.output_times)
     if control.adaptive:
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a number > 0 (got {dt!r})")
@@ -126,30 +143,7 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
         H, supplied, dissipated, previous = start.H, start.supplied, start.dissipated, start.previous
 
     def one(h, t, t1, previous, ratio, step):
-        """One ordinary step of size h from x_n at t to t1 (Newton from the predictor, retried from x_n):
-        (iterations, H_{n+1}, h y.u, h d_n), x_{n+1} not accepted."""
-        problem.set_step(h)
-        problem.set_time(t + 0.5 * h)
-        state.solves += 1
-        try:
-            problem.predict(previous, ratio)
-            solve = problem.solve(step, t1)
-        except NewtonFailure as e:
-            state.iterations += e.iterations
-            if previous is None:
-                raise
-            state.solves += 1
-            problem.predict(None)  # retry from x_n
-            try:
-                solve = problem.solve(step, t1)
-            except NewtonFailure as e:
-                state.iterations += e.iterations
-                raise
-        state.iterations += solve.iterations
-        H_new = problem.hamiltonian()
-        if not np.isfinite(H_new):
-            raise NewtonFailure(step, t1, float("nan"), solve.iterations, "non-finite energy")
-        return solve.iterations, H_new, problem.supplied_work(), problem.dissipated_energy() if dissipates else 0.0
+        return attempt(problem, state, h, t, t1, previous, ratio, step, dissipates)
 
     def record(row, n, loop=None):
         """The row of accepted step n; `loop` = (previous, H, supplied, dissipated): a checkpoint may follow."""
@@ -185,7 +179,7 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
     try:
         if adaptive:
             run_adaptive(problem, t_start, t_end, first, one, record, state, control, h_min,
-                         H, previous, dissipates, bar, (supplied, dissipated))
+                         H, previous, dissipates, bar, (supplied, dissipated), auto)
             return res
         for n in range(first, first + n_steps):
             t, t_next = t_start + n * dt, t_start + (n + 1) * dt
@@ -227,9 +221,39 @@ def run(problem: SteppedSystem, dt: float, t_end: float, writer=None, progress: 
     return res
 
 
-def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, previous, dissipates, bar, sums):
+def attempt(problem, state, h, t, t1, previous, ratio, step, dissipates):
+    """One ordinary step of size h of `problem` from x_n at t to t1 (Newton from the predictor
+    x_n + ratio (x_n - previous), retried once from x_n): (iterations, H_{n+1}, h y.u, h d_n), with
+    x_{n+1} not accepted; `state` (StepState) counts the solves and iterations.  The time loop's step
+    and the step interface's (rodfem/app/simulator.py)."""
+    problem.set_step(h)
+    problem.set_time(t + 0.5 * h)
+    state.solves += 1
+    try:
+        problem.predict(previous, ratio)
+        solve = problem.solve(step, t1)
+    except NewtonFailure as e:
+        state.iterations += e.iterations
+        if previous is None:
+            raise
+        state.solves += 1
+        problem.predict(None)  # retry from x_n
+        try:
+            solve = problem.solve(step, t1)
+        except NewtonFailure as e:
+            state.iterations += e.iterations
+            raise
+    state.iterations += solve.iterations
+    H_new = problem.hamiltonian()
+    if not np.isfinite(H_new):
+        raise NewtonFailure(step, t1, float("nan"), solve.iterations, "non-finite energy")
+    return solve.iterations, H_new, problem.supplied_work(), problem.dissipated_energy() if dissipates else 0.0
+
+
+def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, previous, dissipates, bar, sums,
+                 auto=False):
     """The adaptive loop of `run` (rodfem/analysis/stepping.py): step doubling from x_n, the two half steps
-    kept when the error estimate is within the tolerance."""
+    kept when the error estimate is within the tolerance (`auto`: dt=auto, the first step shrinks freely)."""
     supplied, dissipated = sums
     norm = ErrorNorm(problem, control.rtol, control.atol, t_end if control.per_unit_step else None)
     outputs = sorted({float(x) for x in control.output_times if t_end > x} | {float(t_end)})
@@ -265,7 +289,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
             problem.restore(snap)
             state.rejected += 1
             state.after_reject = True
-            state.h = shrunk(h, err, control.per_unit_step)
+            state.h = shrunk(h, err, control.per_unit_step, FIRST_SHRINK if auto else SHRINK)
             if state.h < h_min:
                 raise NewtonFailure(n + 1, t_next, float("nan"), 0, f"error estimate {err:.3g} times the tolerance "
                                     f"at step {h:.3g}: dt_min = {h_min:.3g} reached")
@@ -278,7 +302,7 @@ def run_adaptive(problem, t, t_end, n, one, record, state, control, h_min, H, pr
                  **problem.observe()}
         step = next_step(h, err, state.after_reject, control.per_unit_step)
         state.h = max(step, proposed) if clipped and not state.after_reject else step
-        state.after_reject = False
+        state.after_reject = auto = False
         state.h_prev = h_b
         state.substeps += 2
         state.max_substep_balance = max(state.max_substep_balance, abs(row_a["balance_error"]),

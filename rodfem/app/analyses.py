@@ -131,7 +131,7 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
             rows.close()
             outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
             outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots,
-                      writer.dim, writer.width)
+                      writer.dim, writer.width, 16, "load factor (0: initial, 1: equilibrium)")
     return problem, result, summary
 
 

@@ -1,4 +1,5 @@
-"""Command line: ``rodfem list | show SCENE | run SCENE [--set NAME=VALUE ...] --out DIR``.
+"""Command line: ``rodfem list | show SCENE | run SCENE [--set NAME=VALUE ...] --out DIR`` (and
+static, linearize, modes, reduce, study).
 
 Every way a run can end is one line on stderr and an exit code
 (rodfem.errors): bad input or environment ``rodfem: error: ...`` naming the
@@ -168,6 +169,24 @@ def cmd_modes(args):
     say(f"results in {out}/: {', '.join(info['files'])}")
 
 
+def cmd_reduce(args):
+    """rodfem reduce SCENE --order r: structure-preserving reduced PH models (issue 29)."""
+    from rodfem.app.reduction import run_reduce
+    out = args.out or os.path.join("results", args.scene + "-reduced")
+    info = run_reduce(args.scene, parse_sets(args.set), out=out, orders=args.order, about=args.about, t=args.time,
+                      alpha=args.alpha)
+    say(f"{info['scene']}: reduced PH models of the {info['n_states']}-state linear model about the {args.about} state "
+        f"({info['n_inputs']} inputs; grid s = {info['alpha']:.3g} + i omega, omega in "
+        f"[{info['grid']['omega_min']:.4g}, {info['grid']['omega_max']:.4g}] rad/s)")
+    say(f"{'order':>5s} {'max |G-Gr|/max |G|':>19s} {'in band':>10s} {'at points':>10s} {'passive':>8s}  first frequencies "
+        "[rad/s] (full)")
+    for r, o in info["orders"].items():
+        pairs = ", ".join(f"{a:.6g} ({b:.6g})" for a, b in zip(o["frequencies_rad_s"][:3], info["full_frequencies_rad_s"]))
+        say(f"{r:>5s} {o['error']['max_relative']:19.2e} {o['error_in_band']['max_relative']:10.2e} "
+            f"{o['interpolation_error']:10.1e} {str(o['checks']['passive']):>8s}  {pairs}")
+    say(f"results in {out}/: r<order>/{{E,J,R,Q,B,C}}.npz, V.npy, reduced.mat; reduce.json, bode.png, summary.json")
+
+
 def parser():
     ap = argparse.ArgumentParser(prog="rodfem", description="Port-Hamiltonian rods, beams and strings in FEniCSx.")
     sub = ap.add_subparsers(dest="command", required=True)
@@ -220,6 +239,23 @@ def add_static_parsers(sub):
                             help="SLEPc (Krylov-Schur, verified; dense fallback up to 2000 states) or scipy's dense QZ "
                                  "(auto: dense up to 1500 states)")
         lp.set_defaults(func=func)
+    add_reduce_parser(sub)
+
+
+def add_reduce_parser(sub):
+    """rodfem reduce (issue 29)."""
+    rp = sub.add_parser("reduce", help="structure-preserving reduced PH models of a scene's linear model")
+    rp.add_argument("scene")
+    rp.add_argument("--order", type=whole, nargs="+", default=[8], metavar="R",
+                    help="reduced orders (even; default 8); several: one model each, one Bode plot")
+    rp.add_argument("--set", action="append", metavar="NAME=VALUE", help="override a parameter (repeatable)")
+    rp.add_argument("--out", metavar="DIR", help="output directory (default results/SCENE-reduced)")
+    rp.add_argument("--about", default="static", choices=("static", "initial"),
+                    help="linearize about the static equilibrium under the loads at --time (default) or the initial state")
+    rp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
+    rp.add_argument("--alpha", type=float, default=0.05, metavar="A",
+                    help="real part of the interpolation points, a fraction of the first natural frequency (default 0.05)")
+    rp.set_defaults(func=cmd_reduce)
 
 
 def main(argv=None):

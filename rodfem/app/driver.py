@@ -46,7 +46,7 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
         n_steps = None if control.adaptive else steps_for(p["dt"], p["t_end"])
     except ValueError as e:
         raise ParameterError(f"parameter 'dt': {e}") from None
-    if control.adaptive and p["dt"] > p["t_end"]:
+    if control.adaptive and p["dt"] != "auto" and p["dt"] > p["t_end"]:
         raise ParameterError(f"parameter 'dt': the first step {p['dt']:g} is longer than t_end = {p['t_end']:g}")
     if continues and (saved[0]["t"] > p["t_end"] if control.adaptive else saved[0]["step"] > n_steps):
         raise ParameterError(f"parameter 't_end': {p['t_end']:g} is before the checkpoint's time {saved[0]['t']:g} "
@@ -65,11 +65,11 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
             result = Result(rows=rows, steps=start.step,   # (its step control's counts: those at the checkpoint)
                             stepping=dict(StepState.from_dict(start.stepping).to_dict(), adaptive=control.adaptive,
                                           dt_min=control.minimum(p["dt"], p["t_end"])))
-            writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 100), start.step, start.t,
+            writer = checkpoint.writer_for(outdir, problem, n_steps, p.get("frames", 101), start.step, start.t,
                                            p.get("section", 0.0), control.output_times or None)
         else:
             result = Result(steps=start.step if start else 0)
-            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 100), p.get("section", 0.0),
+            writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 101), p.get("section", 0.0),
                                 control.output_times or None) if outdir else None)
         saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
         try:
@@ -94,8 +94,8 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
 
 def step_control(p):
     """The time loop's StepControl of the parameters `p` (adaptive: the frames' times are its output times)."""
-    adaptive = p.get("adaptive", "false") == "true"
-    frames = p.get("frames", 100)
+    adaptive = p.get("adaptive", "false") == "true" or p.get("dt") == "auto"   # dt=auto: adaptive steps
+    frames = p.get("frames", 101)
     times = tuple(np.linspace(0.0, p["t_end"], frames).tolist()) if frames > 1 else (p["t_end"],)
     return StepControl(adaptive=adaptive, rtol=p.get("rtol", 1e-3), atol=p.get("atol", 1e-6),
                        dt_min=p.get("dt_min", 0.0), output_times=times if adaptive else (),

@@ -27,6 +27,7 @@ class Parameter:
     low_open: bool = False            # True: value > low, False: value >= low
     choices: Optional[tuple] = None
     infinite: bool = False            # True: +inf is allowed too (a limit that has a meaning)
+    words: tuple = ()                 # texts allowed besides the numbers (dt: "auto")
 
     @property
     def kind(self):
@@ -39,13 +40,15 @@ class Parameter:
         if self.low is not None and self.high is not None:
             return f"{what} in {'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
         if self.low is not None:
-            return f"{what} {'>' if self.low_open else '>='} {self.low:g}{' (inf allowed)' if self.infinite else ''}"
-        return what
+            what = f"{what} {'>' if self.low_open else '>='} {self.low:g}{' (inf allowed)' if self.infinite else ''}"
+        return what + "".join(f" or {w}" for w in self.words)
 
     def parse(self, text):
         if self.choices:
             if text not in self.choices:
                 raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {text!r})")
+            return text
+        if text in self.words:
             return text
         try:
             value = float(text)
@@ -71,6 +74,8 @@ class Parameter:
             if value not in self.choices:
                 raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
             return
+        if isinstance(value, str) and value in self.words:
+            return
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value!r})")
         bad = not (math.isfinite(value) or (self.infinite and value == math.inf))
@@ -83,17 +88,20 @@ class Parameter:
             raise ParameterError(f"parameter '{self.name}' must be {self.allowed()} (got {value:g})")
 
 
-def common(n_elements, dt, t_end, integrator="midpoint", frames=100):
+def common(n_elements, dt, t_end, integrator="midpoint", frames=101):
     """The parameters every scene has."""
     return [
         Parameter("n_elements", n_elements, "", "number of finite elements (at least one per MPI rank)", low=1),
-        Parameter("dt", dt, "s", "time step h (adaptive=true: the first step)", low=0, low_open=True),
+        Parameter("dt", dt, "s", "time step h (adaptive=true: the first step; auto: adaptive steps starting with "
+                  "the first interval between frames, at most t_end/10)", low=0, low_open=True, words=("auto",)),
         Parameter("t_end", t_end, "s", "final time", low=0, low_open=True),
         Parameter("integrator", integrator, "", "time integrator", choices=RULES),
-        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif), evenly spaced "
-                  "with t = 0 and t_end (1: t_end only; every time level when there are fewer steps)", low=1),
+        Parameter("frames", frames, "", "frames written (centreline/, surface/, animation.gif) at t_j = j t_end / "
+                  "(frames - 1), t = 0 and t_end included (between two time levels: interpolated; 101: every "
+                  "t_end/100; 1: t_end only; every time level when there are fewer steps)", low=1),
         Parameter("section", 0.0, "m", "width of the cross-section drawn in surface/ and the pictures "
-                  "(height: half of it; 0: a 25th of the longest body)", low=0),
+                  "(height: half of it; 0: the scene's cross-section if it has one, else a 25th of the "
+                  "longest body)", low=0),
         *stepping(),
     ]
 

@@ -84,6 +84,8 @@ def sweep(p, dts=None, elements=None, levels=DEFAULT_LEVELS):
         if elements:
             raise ParameterError("--elements: this scene has no n_elements (no flexible body); study it along --dt")
         elements = [1]
+    if p["dt"] == "auto":
+        raise ParameterError("parameter 'dt': a study refines a fixed step: give a number, not auto")
     n0, dt0, notes = int(p.get("n_elements", 1)), float(p["dt"]), []
     one_n, one_dt = bool(elements) and len(set(elements)) == 1, bool(dts) and len(set(dts)) == 1
     if one_n and not one_dt and "n_elements" in p:

@@ -117,6 +117,32 @@ class Body:
         terms = [t for t in terms if t is not None]
         return sum(terms[1:], terms[0]) if terms else None
 
+    def algebraic_fields(self):
+        """The fields whose x_n the step's residual does not read: multipliers at t_{n+1} (e.g. of an
+        orthonormality constraint), unknowns of each step rather than states with a memory.  Read off the UFL
+        graph of the residual: x_n enters only through its components x_n[k] (`StateSpace.split`); a field none
+        of whose components appears is algebraic.  (A field read as a whole x_n counts as read.)"""
+        from ufl.classes import FixedIndex, Indexed
+        from ufl.corealg.traversal import unique_pre_traversal
+        read, whole = set(), False
+        for integral in self.residual_form().integrals():
+            for node in unique_pre_traversal(integral.integrand()):
+                if not any(op == self.x0 for op in node.ufl_operands):
+                    continue
+                idx = node.ufl_operands[1] if isinstance(node, Indexed) else ()
+                if idx and all(isinstance(i, FixedIndex) for i in idx):
+                    read.add(int(idx[0]))
+                else:
+                    whole = True
+        if whole:
+            return []
+        out, k = [], 0
+        for f in self.space.fields:
+            if not read & set(range(k, k + f.size)):
+                out.append(f.name)
+            k += f.size
+        return out
+
     # -- set-up -------------------------------------------------------------
     def _tag_ends(self):
         m = self.mesh
@@ -166,6 +192,8 @@ class Body:
                 obs[f"mean_{c}"] = pos[i] / self.length * self.dx
         if not supported:
             obs.update(self.momentum_forms(X))
+        if hasattr(self.model, "columns"):   # a model's own columns (e.g. entropy, mean temperature)
+            obs.update(self.model.columns(X, self.dx, self.ds, self.length))
         for load in self.loads:   # a port may add columns of its own (an actuator's length or volume)
             if hasattr(load, "observables"):
                 obs.update(load.observables(X, self.dx, self.ds))

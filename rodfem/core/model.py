@@ -37,10 +37,19 @@ Optional, for what a run writes (rodfem/io/snapshot.py, rodfem/io/frames.py):
 ``directors(q)`` numbers: q dict field -> nodal values (n, size); returns the section frame
                  (n, 3, 3), columns d1 (axis), d2, d3 (the section); a planar model's plane is
                  z = 0, d3 = e_z.  Without it a body has no section (a string: a round tube)
+``columns(x, dx, ds, length)``
+                 dict column -> UFL functional of the state x = x_{n+1}: the model's own history
+                 columns (e.g. a thermal model's entropy and mean temperature; length = L)
 ``labels``       dict field or output name -> (description, component names)
+``units``        dict field or output name -> its SI unit ("1": dimensionless), written in the
+                 files' field data and fields.json
 ``massless``     True when the model has no inertia: its velocities (the values of
                  ``kinematics``) are not written
 ``box()``        a rigid body's edge lengths (a1, a2, a3) along (d1, d2, d3), for pictures
+``section``      set by a scene (rodfem.io.sections.Section): the cross-section drawn (a rod's, or
+                 a rigid body's link's)
+``link``         set by a scene: a rigid body drawn as a link through these points (k, 3) of its
+                 frame (e.g. its joint points) instead of its box
 
 `Model` and `SteppedSystem` below state these contracts as `typing.Protocol`s (checked by
 type checkers, not at run time).

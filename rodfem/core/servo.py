@@ -226,6 +226,7 @@ def start_multipliers(system):
     through state-dependent directions (a rope's restoring force on the payload is its tension
     times the trolley's offset), which vanish with lambda = u = 0 and leave the matrix singular."""
     points = system.points
+    before = points.x0_values, points.times
     points.step(system.X0, system.t, system.t + system.dt, system.dt)
     system.X0.copy(system.X1)
     b = system.layout.create_vector()
@@ -250,6 +251,9 @@ def start_multipliers(system):
     for X in (system.X0, system.X1):
         if system.comm.rank == 0:
             X.getArray()[system.layout.multipliers] = lam
+    # no step has been taken: x_0 is observed at its own time (the t = 0 row's constraint residual
+    # |g(q_0) - path(t_0)|, not against path(t_0 + h) with whatever h the system had when built)
+    points.x0_values, points.times = before
 
 
 # -- paths and the computed inputs ---------------------------------------------------------------

@@ -30,6 +30,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from rodfem.core.body import Body
+from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.servo import Servo, start_multipliers
@@ -84,6 +85,7 @@ class System:
         self.dt = 1.0  # the step h
         self.momentum = momentum
         self.bodies, self.joints, self.components, self.markers, self.recorders = {}, [], [], {}, []
+        self.contacts = []   # (law, a, b, name): contact between bodies' centrelines (rodfem/core/bodycontact.py)
         self._ready = False
 
     # -- the sketch -------------------------------------------------------------
@@ -147,6 +149,30 @@ class System:
         self._check_name(component.name)
         self.components.append(component)
         return component
+
+    def contact(self, law, a: BodyRef, b: Optional[BodyRef] = None, name: str = ""):
+        """Contact between the centrelines of the flexible bodies a and b (3D rods, strings), or of a with
+        itself (b None), by the law (forms/rod_contact.py: `RodContact`); its energy joins H, its columns
+        are name.energy, name.N, name.Fn_x, ... (rodfem/core/bodycontact.py)."""
+        name = name or f"{getattr(law, 'name', 'contact')}" + (f"{len(self.contacts) + 1}" if self.contacts else "")
+        what = f"contact {name}"
+        check_law(law, what)
+        if self._ready:
+            raise ConstraintError(f"{what}: the system has been built (it has run); place every contact before the first run")
+        for ref in (a, b):
+            if ref is None:
+                continue
+            if not isinstance(ref, BodyRef) or self.bodies.get(ref.name) is not ref:
+                raise ConstraintError(f"{what}: {ref!r} is not a body of this system (use the BodyRef that add returns)")
+            if ref.body.rigid:
+                raise ConstraintError(f"{what}: body {ref.name} is rigid; contact between centrelines needs rods or strings")
+        if b is a:
+            raise ConstraintError(f"{what}: a body with itself is self-contact: give b = None")
+        self._check_name(name)
+        if any(c[3] == name for c in self.contacts):
+            raise ConstraintError(f"contact name {name!r} is used twice")
+        self.contacts.append((law, a, b, name))
+        return name
 
     def _check_points(self, what, a, b):
         if self._ready:
@@ -217,8 +243,12 @@ class System:
         self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
                        for r in refs]
+        self.joint_rows = JointRows(self.points) if (self.joints or self.components) else None
+        self.body_contacts = (BodyContacts(self.contacts, refs, self.layout, fixed_dofs(self, self.layout),
+                                           self.layout.create_vector(), self.integrator) if self.contacts else None)
+        parts = [c for c in (self.joint_rows, self.body_contacts) if c is not None]
         self.assembler = BlockAssembler(self.layout, self.blocks,
-                                        JointRows(self.points) if (self.joints or self.components) else None)
+                                        (parts[0] if len(parts) == 1 else Couplings(parts)) if parts else None)
         self.X1 = self.assembler.vector
         self.X0 = self.layout.create_vector()
         self._pull(self.X1, "x1")
@@ -342,8 +372,10 @@ class System:
 
     def snapshot(self):
         """What a step changes of the loop's state: x_n and the control laws' states (`restore` puts them back:
-        a rejected step of the step-size control, rodfem/analysis/stepping.py)."""
+        a rejected step of the step-size control, rodfem/analysis/stepping.py).  x_n is read from the bodies, as
+        `predict` does: a change made to a body's x0 after `build` (a scene's static equilibrium) is x_n."""
         self.build()
+        self._pull(self.X0, "x0")
         return (self.X0.getArray(readonly=True).copy(),
                 [list(c.law.state) for c in self.components if getattr(c, "stateful", False)])
 
@@ -358,17 +390,37 @@ class System:
             c.law.state = list(state)
 
     def field_groups(self):
-        """The owned entries of the loop's state vector by body and field (a list of index arrays, the same
-        number on every rank): the step-size control (rodfem/analysis/stepping.py) measures each field against
-        its own size.  The multipliers (constraint forces, algebraic) are left out."""
+        """The owned entries of the loop's state vector by body and field: a list of (indices, paired), the same
+        number on every rank; the step-size control (rodfem/analysis/stepping.py) measures each field against
+        its own size.  The multipliers (constraint forces, algebraic: the joints' and the bodies' fields at
+        t_{n+1} that the step does not carry over, `Body.algebraic_fields`) are left out: their values at
+        the middle and the end of a doubled step are not two approximations of one quantity.
+
+        `paired` (else None) marks a velocity of a constrained body (one with multipliers of its own or a
+        joint's point): the indices of the configuration it moves (`model.kinematics`).  Its end-of-step
+        values are index-2 variables: the constraint rows G(q_m) v_m = 0 hold the midpoint velocity, and
+        v_{n+1} = 2 v_m - v_n carries an undamped (-1)^n component along G^T that one step of h and two of
+        h/2 leave with opposite signs whatever h; the control measures it by the displacement h e_v it
+        makes (the index-2 components scaled by h, Hairer & Wanner, Solving Ordinary Differential
+        Equations II, Springer 1996, sec. VII.8)."""
         self.build()
+        joined = {id(p.body.body) for j in self.joints for p in getattr(j, "points", (j.a, j.b)) if p.body is not None}
         groups = []
         for blk, ref in zip(self.blocks, self.bodies.values()):
             body, owned = ref.body, blk.hi - blk.lo
-            for f in body.space.fields:
-                dofs = body.space.field_dofs(f.name) if body.rigid else body.space.collapse(f.name)[1]
+            algebraic = set(body.algebraic_fields())
+            constrained = bool(algebraic) or id(body) in joined
+            velocity_of = {v: q for q, v in body.model.kinematics.items()} if constrained else {}
+
+            def entries(name):
+                dofs = body.space.field_dofs(name) if body.rigid else body.space.collapse(name)[1]
                 dofs = np.asarray(dofs, dtype=np.int64).ravel()
-                groups.append(blk.lo + dofs[dofs < owned])
+                return blk.lo + dofs[dofs < owned]
+            for f in body.space.fields:
+                if f.name in algebraic:
+                    continue
+                q = velocity_of.get(f.name)
+                groups.append((entries(f.name), None if q is None else entries(q)))
         return groups
 
     def state(self):
@@ -379,6 +431,8 @@ class System:
         """x_{n+1} at time t by Newton (raises NewtonFailure)."""
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
+        if self.body_contacts is not None:
+            self.body_contacts.step(self.X0)
         return self.newton.solve(step, t)
 
     def accept(self):
@@ -401,14 +455,16 @@ class System:
         return self.comm.allreduce(fem.assemble_scalar(compiled), op=MPI.SUM)
 
     def hamiltonian(self) -> float:
-        """H(x_{n+1}) = sum of the bodies' H and of the components' stored energies."""
+        """H(x_{n+1}) = sum of the bodies' H, of the components' and of the contacts' stored energies."""
         self.build()
         stored = self.points.stored_energy(self.X1) if self.components else 0.0
+        if self.body_contacts is not None:
+            stored += self.body_contacts.energy(self.X1)
         return self._sum("H") + stored
 
     def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports, the driven joints and the servos' inputs."""
-        joints = self.assembler.coupling.work if (self.joints or self.components) else 0.0
+        joints = self.joint_rows.work if self.joint_rows is not None else 0.0
         return self._sum("work") + joints
 
     @property
@@ -420,7 +476,7 @@ class System:
 
     def dissipated_energy(self) -> float:
         """h d_n of the last step: the sum over the dissipating bodies and dampers."""
-        return self._sum("dissipation") + (self.assembler.coupling.dissipated if self.components else 0.0)
+        return self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
 
     def observe(self) -> dict:
         """The history's columns of the state x_{n+1}."""
@@ -432,6 +488,8 @@ class System:
             obs.update(self.points.observe(self.X1))
         if not self.single:
             obs.update({k[4:]: self._sum(k) for k in self.columns})
+        if self.body_contacts is not None:
+            obs.update(self.body_contacts.observe(self.X1))
         for name, ref in self.bodies.items():
             for k, value in ref.body.monitor().items():
                 obs[f"{name}.{k}" if name else k] = value
@@ -502,13 +560,7 @@ class PointIndex:
             wanted.append(g[0])
         self.wanted = np.unique(np.concatenate(wanted)).astype(PETSc.IntType) if wanted else np.zeros(0, PETSc.IntType)
         # Dirichlet dofs among them: the joints leave those rows and columns alone
-        fixed = []
-        for i, r in enumerate(system.bodies.values()):
-            own = layout.sizes[i]
-            for bc in r.body.bcs:
-                dofs, n_owned = bc.dof_indices()
-                fixed += [layout.start + layout.offsets[i] + int(d) for d in dofs[:n_owned] if d < own]
-        self.fixed = set(np.concatenate(self.comm.allgather(np.array(fixed, dtype=np.int64))).tolist())
+        self.fixed = fixed_dofs(system, layout)
         root = self.comm.rank == 0
         self.gathered = PETSc.Vec().createSeq(len(self.wanted) if root else 0, comm=PETSc.COMM_SELF)
         is_from = PETSc.IS().createGeneral(self.wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
@@ -520,7 +572,7 @@ class PointIndex:
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
         self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
-        self.x0_values, self.times = None, (0.0, 0.0, 1.0)
+        self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
         """Values of X at the wanted global indices (on rank 0; None elsewhere)."""
@@ -605,6 +657,28 @@ class PointIndex:
                 for c, value in zip("xyz", x):
                     obs[f"{name}_{c}"] = float(value)
         return self.comm.bcast(obs, root=0)
+
+
+class Couplings:
+    """Several couplings of rodfem/fem/assembly.py as one (the joints' rows and the bodies' contacts)."""
+
+    def __init__(self, parts):
+        self.parts = parts
+
+    def entries(self):
+        return [e for p in self.parts for e in p.entries()]
+
+    def update(self, X):
+        for p in self.parts:
+            p.update(X)
+
+    def residual(self, X, b):
+        for p in self.parts:
+            p.residual(X, b)
+
+    def jacobian(self, X, A):
+        for p in self.parts:
+            p.jacobian(X, A)
 
 
 class JointRows:

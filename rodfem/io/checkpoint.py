@@ -433,12 +433,15 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
     """A RunWriter that appends to history.csv and keeps the frames up to the checkpoint, their
     pictures read back from their centreline files (shapes.png and the animation show every frame,
     also for a run resumed from a checkpoint at t_end: killed before its summary and pictures)."""
+    from rodfem.io.animation import marks_sketch
     from rodfem.io.output import RunWriter
+    from rodfem.io.vtk import read_vtp
 
     class ResumedWriter(RunWriter):
         def __init__(self):
             super().__init__(outdir, problem, n_steps, frames, section, times)
             self.count = step + 1
+            self.hold(step, t)     # a frame between the checkpoint's level and the next one (collective)
             if problem.comm.rank != 0:
                 return
             path = outdir.file("history.csv")
@@ -459,10 +462,19 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
                         name = ds.get("file")
                         kept.setdefault(tf, []).append((name, name.replace("centreline/", "surface/", 1)))
                 self.frames = sorted(kept.items())
+                marks = outdir.file("joints.pvd")
+                if self.marks and os.path.isfile(marks):
+                    self.mark_frames = [(float(ds.get("timestep")), ds.get("file"))
+                                        for ds in ET.parse(marks).getroot().iter("DataSet")
+                                        if float(ds.get("timestep")) <= t * (1 + 1e-12) + 1e-300]
+                joints = dict(self.mark_frames)
                 for tf, names in self.frames:
                     try:
-                        self.snapshots.append((tf, [kept_sketch(outdir.file(files[0]), view, self.width)
-                                                    for files, view in zip(names, self.views)]))
+                        sketches = [kept_sketch(outdir.file(files[0]), view, self.width)
+                                    for files, view in zip(names, self.views)]
+                        if self.marks:
+                            sketches.append(marks_sketch(read_vtp(outdir.file(joints[tf])).points))
+                        self.snapshots.append((tf, sketches))
                     except (OSError, ValueError, KeyError, ET.ParseError):
                         pass   # a frame file gone or damaged: the pictures go without it
     return ResumedWriter()
@@ -482,4 +494,6 @@ def kept_sketch(path, view, width):
             d.append(np.tile([0.0, 0.0, 1.0], (len(poly.points), 1)))
         directors = np.stack(d, axis=-1)
     box = tuple(view.model.box()) if view.body.rigid and hasattr(view.model, "box") else None
-    return sketch(SimpleNamespace(kind=view.kind, position=poly.points, directors=directors, box=box), width)
+    link = getattr(view.model, "link", None) if view.body.rigid else None
+    return sketch(SimpleNamespace(name=view.name, kind=view.kind, position=poly.points, directors=directors, box=box,
+                                  link=link), width)

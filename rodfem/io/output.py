@@ -10,12 +10,22 @@
 * surface.pvd, surface/         each body's surface: its section swept along the centreline and
                  turned with the directors (rods), a tube (strings), a box (rigid bodies), with the
                  strains and stress resultants cell by cell (rodfem/io/frames.py)
+* joints.pvd, joints/   the joints, components and supports as points (and lines between a
+                 joint's two points when apart), one block (rodfem/io/glyphs.py); none without any
 * fields.json    what every array of those files is (components, description), per body
+* view.py        a ParaView script that opens the run (`paraview --script=view.py`; rodfem/io/paraview.py)
 * shapes.png, energy.png, animation.gif   pictures: shapes over time, energy history, the motion
                  (one GIF frame per .pvd frame; rodfem/io/animation.py)
 
-The frames are the `frames` time levels of `frame_levels` (t = 0 and t_end included; adaptive steps:
-at the `frames` evenly spaced times, which the steps land on); the
+A rod's surface shows the scene's physical cross-section (the model's ``section``, a
+rodfem.io.sections.Section: round with a marker fin along d2, or rectangular) unless the `section`
+parameter gives a drawing width.  The frames are at the `frames` evenly spaced times t_j = j t_end / (frames - 1) (t = 0 and t_end
+included; `frame_plan`): a time on a time level is that level's state; a time between two levels
+t_n < t_j < t_{n+1} gets the state interpolated linearly between them (`snapshot.blend`: the
+midpoint rule moves q on a straight line over a step); adaptive steps land on the t_j.  Every
+frame file carries its time (field data TimeValue, the .pvd's timestep), written as the shortest
+decimal of 12 significant digits (`clean_time`: 2.4, not n dt = 2.4000000000000004), and the SI
+units of its arrays (field data `units`, "name [unit]"; also in fields.json).  The
 section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
 computed from the state gathered on rank 0 (rodfem/io/snapshot.py): the same on any number of ranks.
 
@@ -39,14 +49,16 @@ import numpy as np
 
 from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
-from rodfem.io.animation import box_size, plot_shapes, sketch, write_animation
-from rodfem.io.frames import centreline, describe, surface
-from rodfem.io.snapshot import BodyView
-from rodfem.io.vtk import write_pvd, write_vtp
+from rodfem.io.animation import box_size, marks_sketch, plot_shapes, sketch, write_animation
+from rodfem.io.frames import centreline, describe, drawn_section, surface
+from rodfem.io.glyphs import glyphs, marks_of
+from rodfem.io.snapshot import BodyView, blend
+from rodfem.io.vtk import Array, write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
              "centreline/frame_*.vtu", ".*.tmp", "centreline/.*.tmp", "surface/.*.tmp",
+             "joints.pvd", "joints/frame_*.vtp", "joints/.*.tmp", "view.py",
              "checkpoint.npz", "checkpoint.npz.tmp*",
              # the analyses' files (rodfem static / linearize / modes): a later run of any command clears them
              "loadsteps.csv", "modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "linear.mat", "linear.json",
@@ -152,13 +164,30 @@ class OutDir:
                 os.unlink(path)
 
 
-def frame_levels(n_steps, frames):
-    """The time levels (0..n_steps) written as frames: `frames` of them, evenly spaced, t = 0 and t_end
-    included; every level if there are fewer; t_end alone for frames = 1."""
+def frame_plan(n_steps, frames):
+    """The frames of a run of n_steps fixed steps: [(n, theta)], frame j at t_n + theta h, evenly
+    spaced with t = 0 and t_end (j n_steps / (frames - 1) levels, in exact integer arithmetic: theta
+    = 0 on a level); every level if there are fewer; t_end alone for frames = 1."""
     if frames <= 1:
-        return {n_steps}
-    k = min(frames, n_steps + 1)
-    return set(np.floor(np.linspace(0, n_steps, k) + 0.5).astype(int).tolist())
+        return [(n_steps, 0.0)]
+    k = min(frames, n_steps + 1) - 1
+    return [(j * n_steps // k, (j * n_steps % k) / k) for j in range(k + 1)]
+
+
+def frame_levels(n_steps, frames):
+    """The time levels whose states are frames as they are (theta = 0 in `frame_plan`)."""
+    return {n for n, theta in frame_plan(n_steps, frames) if theta == 0}
+
+
+def clean_time(t):
+    """t to 12 significant digits (the step sum's round-off gone: 2.4000000000000004 -> 2.4)."""
+    return float(f"{t:.12g}")
+
+
+def units_list(poly, units):
+    """The field data `units` of a frame: "name [unit]" for its points and every array."""
+    names = ["points", *poly.point_data, *(k for k in poly.cell_data if k not in poly.point_data)]
+    return [f"{name} [{units.get(name, '')}]" for name in names] + ["TimeValue [s]"]
 
 
 def plotting():
@@ -184,9 +213,14 @@ class RunWriter:
         plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
         # adaptive steps (n_steps None): the frames at the `times` the steps land on
-        self.levels = frame_levels(n_steps, frames) if times is None else set()
+        plan = frame_plan(n_steps, frames) if times is None else []
+        self.levels = {n for n, theta in plan if theta == 0}
+        self.between = {n: theta for n, theta in plan if theta > 0}   # frames between level n and n + 1
+        self._held = None                                               # (n, t_n, states at n)
         self.times = None if times is None else set(times)
         self.views = [BodyView(name, body) for name, body in problem.body_items()]
+        self.marks = marks_of(problem)          # joints, components, supports (joints.pvd)
+        self.mark_frames = []                   # [(t, file)]
         self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
         self.dim = max(v.dim for v in self.views)
@@ -195,9 +229,21 @@ class RunWriter:
     # -- per step (collective) ----------------------------------------------------
     def record(self, row, problem):
         self.out.do("write history.csv", self._append, row)
-        if self.count in self.levels or (self.times is not None and row["t"] in self.times):
+        n = self.count
+        if n in self.levels or (self.times is not None and row["t"] in self.times):
             self.frame(row["t"])
+        if self._held is not None and self._held[0] == n - 1:     # a frame between level n - 1 and n
+            _, t0, before = self._held
+            theta, self._held = self.between[n - 1], None
+            after = [view.gather() for view in self.views]      # collective
+            self.frame(t0 + theta * (row["t"] - t0), [blend(a, b, theta) for a, b in zip(before, after)])
+        self.hold(n, row["t"])
         self.count += 1
+
+    def hold(self, n, t):
+        """Keep the state of level n if a frame lies between it and the next level (collective)."""
+        if n in self.between:
+            self._held = (n, t, [view.gather() for view in self.views])
 
     def _append(self, row):
         """One whole row of history.csv: a write that fails (a full disk) leaves the file at the end of
@@ -221,9 +267,11 @@ class RunWriter:
             raise
         self._whole = self._file.tell()
 
-    def frame(self, t):
-        states = [view.gather() for view in self.views]  # collective
-        self.out.do("write a frame", self._write_frame, t, states)
+    def frame(self, t, states=None):
+        """Write the frame of time t: the current state, or `states` (BodyStates on rank 0).  Collective."""
+        if states is None:
+            states = [view.gather() for view in self.views]
+        self.out.do("write a frame", self._write_frame, clean_time(t), states)
 
     def file_name(self, kind, k, view):
         """centreline/frame_00007.vtp (one body) or centreline/frame_00007_crank.vtp (a system's body)."""
@@ -236,13 +284,26 @@ class RunWriter:
         names = []
         for view, state in zip(self.views, states):
             files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
-            polys = (centreline(state, view.labels),
-                     surface(state, view.labels, self.width, box_size, view.rates))
+            polys = (centreline(state, view.labels, view.velocity),
+                     surface(state, view.labels, self.width, box_size, view.rates, view.velocity,
+                             drawn_section(view.model, self.width, self.section)))
             for name, poly in zip(files, polys):
+                poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, view.units)}
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
             names.append(files)
         self.frames.append((t, names))
-        self.snapshots.append((t, [sketch(state, self.width) for state in states]))
+        sketches = [sketch(state, self.width) for state in states]
+        if self.marks:
+            name = f"joints/frame_{k:05d}.vtp"
+            poly = glyphs(self.marks, {v.name: st for v, st in zip(self.views, states)},
+                          {v.name: v.model for v in self.views})
+            poly.field_data.update({"TimeValue": Array(np.array([t])), "units": ["points [m]", "TimeValue [s]"]})
+            replace_atomically(self.out.file(name), lambda tmp: write_vtp(tmp, poly))
+            self.mark_frames.append((t, name))
+            replace_atomically(self.out.file("joints.pvd"),
+                               lambda tmp: write_pvd(tmp, [(tf, 0, f, "joints") for tf, f in self.mark_frames]))
+            sketches.append(marks_sketch(poly.points))
+        self.snapshots.append((t, sketches))
         for i, kind in enumerate(("centreline", "surface")):
             series = [(tf, b, files[b][i], view.name) for tf, files in self.frames
                       for b, view in enumerate(self.views)]
@@ -254,11 +315,19 @@ class RunWriter:
         boxes = [np.max(s.box) for s in states if s.box is not None]
         self.width = self.section or (max(lengths) / 25 if lengths else max(boxes, default=4.0) / 4)
         os.makedirs(self.out.file("surface"), exist_ok=True)
+        if self.marks:
+            os.makedirs(self.out.file("joints"), exist_ok=True)
         fields = {"section": {"width (along d2)": self.width, "height (along d3)": 0.5 * self.width,
                               "string diameter": 0.5 * self.width},
+                  "time": {"unit": "s", "frames": "field data TimeValue and the .pvd's timestep: the frame's "
+                           "time t_j = j t_end / (frames - 1) (12 significant digits); the state of "
+                           "that time level, or interpolated linearly between the two levels around it"},
                   "bodies": {view.name or "body": dict(model=type(view.model).__name__,
                                                        **describe(state, view.labels, view.omitted,
-                                                                  view.rates))
+                                                                  view.rates, view.velocity, view.units),
+                                                       **({"section": drawn_section(view.model, self.width,
+                                                                                    self.section).describe()}
+                                                          if state.kind == "rod" else {}))
                              for view, state in zip(self.views, states)}}
         write_json(self.out.file("fields.json"), fields)
 
@@ -285,6 +354,11 @@ class RunWriter:
     def _plots(self, result):
         if result is not None and result.rows:
             plot_energy(self.out.file("energy.png"), result)
+        if self.frames:
+            from rodfem.io.paraview import run_facts, write_script
+            units = {k: u for v in self.views for k, u in v.units.items()}
+            facts = run_facts(self.out.path, "blocks" if len(self.views) > 1 else None)
+            replace_atomically(self.out.file("view.py"), lambda tmp: write_script(tmp, facts, units))
         if self.snapshots:
             plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
             write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)

@@ -47,6 +47,7 @@ class BodyState:
     cells: dict = field(default_factory=dict)
     degree: int = 1
     box: tuple = None
+    link: np.ndarray = None     # a rigid body drawn as a link: its points (k, 3) in the body frame
 
 
 class BodyView:
@@ -62,6 +63,8 @@ class BodyView:
         self.nodal = [f.name for f in S.fields if f.family == pos.family and f.degree == pos.degree
                       and f.name != pos.name and f.name not in self.omitted]
         self.rates = [n for n in getattr(self.model, "kinematics", {}).values() if n in self.nodal]
+        velocity = getattr(self.model, "kinematics", {}).get(self.model.position)
+        self.velocity = velocity if velocity in self.nodal else None     # (None: omitted or none)
         self.has_frame = hasattr(self.model, "directors")
         self.kind = ("box" if self.has_frame else "point") if body.rigid else ("rod" if self.has_frame else "line")
         self._outputs = None   # (fem.Expression, [(name, size)]), made at the first frame
@@ -69,6 +72,14 @@ class BodyView:
     @property
     def labels(self):
         return getattr(self.model, "labels", {})
+
+    @property
+    def units(self):
+        """{array: SI unit} of everything the files hold for this body ("1": dimensionless)."""
+        units = dict(getattr(self.model, "units", {}))
+        position = units.get(self.model.position, "m")
+        return {"s": position, "speed": units.get(self.velocity, ""), "d1": "1", "d2": "1", "d3": "1",
+                **units, "points": position}
 
     def output_names(self):
         """[(name, size)] of the model's derived fields (flexible bodies)."""
@@ -118,7 +129,24 @@ class BodyView:
             state.cells = by_name(np.concatenate([g[1] for g in gathered]), self._outputs[1])
         if body.rigid and hasattr(self.model, "box"):
             state.box = tuple(self.model.box())
+        if body.rigid and getattr(self.model, "link", None) is not None:
+            state.link = np.asarray(self.model.link, dtype=float)
         return state
+
+
+def blend(a, b, theta):
+    """The BodyState (1 - theta) a + theta b of one body at two time levels (None on ranks other than 0):
+    the state at t_n + theta h.  The midpoint rule (and the discrete gradient) move the configuration
+    on a straight line over a step, q_{n+1} = q_n + h v_{n+1/2}: its positions and directors are on
+    that line; the velocities and stresses are interpolated linearly too (second order, like the
+    scheme).  The directors are orthonormal at the levels only (to O(h^2) between them)."""
+    if a is None:
+        return None
+    mix = lambda x, y: None if x is None else (1 - theta) * x + theta * y   # noqa: E731
+    return BodyState(a.name, a.kind, a.dim, a.s, mix(a.position, b.position),
+                     {k: mix(v, b.fields[k]) for k, v in a.fields.items()}, mix(a.directors, b.directors),
+                     {k: (v if k == "s" else mix(v, b.cells[k])) for k, v in a.cells.items()}, a.degree, a.box,
+                     a.link)
 
 
 def by_name(cells, names):

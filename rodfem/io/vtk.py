@@ -4,6 +4,10 @@ A .vtp piece holds points and any of vertices, polylines and polygons, with poin
 arrays are inline binary (base64 of a UInt64 byte count followed by the little-endian values), the
 encoding VTK and ParaView read without an extension and that `read_vtp` (below, for tests and
 scripts) reads back.  Arrays may name their components (ComponentName0, ...: ParaView shows them).
+The point and cell data may name their active attributes (``<PointData Normals="d2" Vectors="v"
+Scalars="speed">``: what Glyph, Tube and colouring take by default).  Field data (one set per
+file) holds numbers, e.g. TimeValue (the frame's time: a series of .vtp files opened without the
+.pvd gets its times from it), and lists of strings (a String array of null-terminated strings).
 The bytes depend on the values only: the same state gives the same file on any number of ranks.
 """
 import base64
@@ -35,6 +39,10 @@ class PolyData:
     polys: list = field(default_factory=list)
     point_data: dict = field(default_factory=dict)
     cell_data: dict = field(default_factory=dict)
+    active: dict = field(default_factory=dict)        # {"PointData" | "CellData": {"Normals": name, ...}}
+    field_data: dict = field(default_factory=dict)    # name -> numbers (Array) or a list of strings
+
+ATTRIBUTES = ("Scalars", "Vectors", "Normals", "Tensors", "TCoords")
 
 
 def _encode(values):
@@ -42,8 +50,16 @@ def _encode(values):
     return base64.b64encode(np.uint64(len(data)).tobytes() + data)
 
 
-def _array(name, arr, components=(), indent=8):
-    """The bytes of one DataArray element."""
+def _strings(name, strings, indent=6):
+    """A String DataArray: the strings' UTF-8 bytes, each ended by a null byte."""
+    data = b"".join(s.encode() + b"\0" for s in strings)
+    return (b" " * indent + f'<DataArray type="String" Name={quoteattr(name)} NumberOfTuples="{len(strings)}" '
+            f'format="binary">'.encode() + base64.b64encode(np.uint64(len(data)).tobytes() + data)
+            + b"</DataArray>\n")
+
+
+def _array(name, arr, components=(), indent=8, tuples=False):
+    """The bytes of one DataArray element (`tuples`: with NumberOfTuples, as field data needs)."""
     values = np.asarray(arr)
     if values.dtype.kind == "f":
         values = values.astype(np.float64, copy=False)
@@ -53,6 +69,8 @@ def _array(name, arr, components=(), indent=8):
     attrs = {"type": _TYPES[values.dtype], "NumberOfComponents": str(ncomp), "format": "binary"}
     if name:
         attrs["Name"] = name
+    if tuples:
+        attrs["NumberOfTuples"] = str(len(values))
     for i, c in enumerate(components[:ncomp] if ncomp > 1 else ()):
         attrs[f"ComponentName{i}"] = str(c)
     head = " ".join(f'{k}={quoteattr(v)}' for k, v in attrs.items())
@@ -70,11 +88,18 @@ def write_vtp(path, poly):
     """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
     parts = [b'<?xml version="1.0" encoding="utf-8"?>\n'
              b'<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
-             b"  <PolyData>\n",
-             f'    <Piece NumberOfPoints="{len(poly.points)}" NumberOfVerts="{len(poly.verts)}" '
+             b"  <PolyData>\n"]
+    if poly.field_data:
+        parts.append(b"    <FieldData>\n")
+        parts += [_strings(name, v) if isinstance(v, (list, tuple)) else
+                  _array(name, np.atleast_1d(v.values), v.components, indent=6, tuples=True)
+                  for name, v in poly.field_data.items()]
+        parts.append(b"    </FieldData>\n")
+    parts += [f'    <Piece NumberOfPoints="{len(poly.points)}" NumberOfVerts="{len(poly.verts)}" '
              f'NumberOfLines="{len(poly.lines)}" NumberOfStrips="0" NumberOfPolys="{len(poly.polys)}">\n'.encode()]
     for tag, data in (("PointData", poly.point_data), ("CellData", poly.cell_data)):
-        parts.append(f"      <{tag}>\n".encode())
+        active = "".join(f" {k}={quoteattr(v)}" for k, v in poly.active.get(tag, {}).items() if v in data)
+        parts.append(f"      <{tag}{active}>\n".encode())
         parts += [_array(name, a.values, a.components) for name, a in data.items()]
         parts.append(f"      </{tag}>\n".encode())
     parts += [b"      <Points>\n", _array("", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3)),
@@ -106,6 +131,8 @@ def _decode(el):
     if el.get("format") != "binary":
         raise ValueError("read_vtp reads the binary arrays write_vtp writes")
     n = int(np.frombuffer(raw[:8], dtype="<u8")[0])
+    if el.get("type") == "String":
+        return [t.decode() for t in raw[8:8 + n].split(b"\0")[:-1]]
     values = np.frombuffer(raw[8:8 + n], dtype=_DTYPES[el.get("type")].newbyteorder("<"))
     ncomp = int(el.get("NumberOfComponents", "1"))
     values = values.reshape(-1, ncomp) if ncomp > 1 else values
@@ -115,7 +142,8 @@ def _decode(el):
 
 def read_vtp(path):
     """The PolyData of a file written by `write_vtp`."""
-    piece = ET.parse(path).getroot().find("PolyData/Piece")
+    root = ET.parse(path).getroot()
+    piece = root.find("PolyData/Piece")
     out = PolyData(points=_decode(piece.find("Points/DataArray")).values)
     for tag, attr in (("Verts", "verts"), ("Lines", "lines"), ("Polys", "polys")):
         el = piece.find(tag)
@@ -128,6 +156,11 @@ def read_vtp(path):
     for tag, attr in (("PointData", "point_data"), ("CellData", "cell_data")):
         for a in piece.findall(f"{tag}/DataArray"):
             getattr(out, attr)[a.get("Name")] = _decode(a)
+        el = piece.find(tag)
+        if el is not None and any(k in el.attrib for k in ATTRIBUTES):
+            out.active[tag] = {k: v for k, v in el.attrib.items() if k in ATTRIBUTES}
+    for a in root.findall("PolyData/FieldData/DataArray"):
+        out.field_data[a.get("Name")] = _decode(a)
     return out
 
 

@@ -163,3 +163,26 @@ def test_the_line_search_keeps_the_easy_scenes_newton_iterations(scene, sets):
             options.delValue("rodfem_snes_linesearch_type")
         its[search] = column(result, "newton_its")
     assert np.array_equal(its["basic"], its[None]) and math.isclose(its[None].mean(), its["basic"].mean())
+
+
+def test_a_sub_step_that_fails_partway_through_a_split_restarts_from_x_n():
+    """The oscillator at h = 0.01, its step 1 forced to fail in Newton whole and again in the second of its
+    two sub-steps (the first sub-step accepted): the four sub-steps then start from x_0 at t = 0, not from
+    the first sub-step's state.  The run meets the exact solution to the midpoint rule's error (measured
+    3.8e-5 over t <= 0.2; starting the split from the failed state would shift it by v h / 2 = 2e-3), two
+    attempts rejected, steps 1 and 2 done in 4 sub-steps, step 3 in 2 (the split halves after a success)."""
+    from rodfem.errors import NewtonFailure
+    dt = 0.01
+    s = oscillator()
+    real = s.solve
+
+    def solve(step, t):
+        if step == 1 and s.dt > 0.3 * dt and t > 0.51 * dt:   # the whole step and its second half
+            raise NewtonFailure(step, t, 1.0, 0, "forced")
+        return real(step, t)
+    s.solve = solve
+    result = run(s, dt, 0.2)
+    t, x = column(result, "t"), column(result, "mass_x")
+    assert result.stepping["rejected"] == 2      # the step whole, then in two sub-steps
+    assert result.stepping["split_steps"] == 3 and result.stepping["substeps"] == 20 + 3 + 3 + 1
+    assert np.max(np.abs(x - exact(t))) <= 1e-4, np.max(np.abs(x - exact(t)))

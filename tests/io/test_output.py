@@ -4,8 +4,8 @@ standard library's XML) and checked against the model's own values, not against 
 - centreline/: one polyline per body through the nodes in order of s; its points are the state's;
 - surface/: the section's corners at every node are r + a d2 + b d3 with the exported directors;
 - the strains and stress resultants are the model's: the state's Gamma, kappa (planar), the
-  compatible strains at t = 0, N = dW/dGamma; the 3D rod's Gamma, K of its configuration, the
-  helix's exact curvature and end moment; a string's stretch |d_s r|;
+  compatible strains at t = 0, N = dW/dGamma; the 3D rod's C_M M, the helix's exact curvature
+  and end moment (tests/io/test_output_physics.py: C_N N and C_M M at every node); a string's stretch |d_s r|;
 - frames: the promised number, t = 0 and t_end, the last frame at the history's tip;
 - animation.gif has one picture per frame; a massless scene writes no velocities;
 - `mpirun -n 2` writes the serial bytes for the same state (and the serial values to round-off later).
@@ -152,21 +152,19 @@ def test_helix_strains_moments_surface_and_no_velocities(tmp_path):
     assert set(fields["omitted"]) == {"v", "w1", "w2", "w3"}
     assert fields["centreline point data"]["lam"]["components"] == ["11", "22", "33", "12", "13", "23"]
     d = [c.point_data[f"d{i}"].values for i in (1, 2, 3)]
-    # Gamma, K of the configuration at the elements' middle nodes, from the exported points and directors
+    # K of the configuration at the elements' middle nodes, from the exported points and directors
     h = helix.LENGTH / p["n_elements"]
     mid = np.arange(1, n, 2)
-    rs = (c.points[mid + 1] - c.points[mid - 1]) / h                    # d_s r of P2 at the middle node
     ds = [(di[mid + 1] - di[mid - 1]) / h for di in d]
-    Gamma = np.column_stack([np.sum(d[i][mid] * rs, axis=1) for i in range(3)]) - [1.0, 0.0, 0.0]
     K = np.column_stack([0.5 * (np.sum(ds[j] * d[k][mid], 1) - np.sum(ds[k] * d[j][mid], 1))
                          for j, k in ((1, 2), (2, 0), (0, 1))])
-    assert np.max(np.abs(c.point_data["Gamma"].values[mid] - Gamma)) <= 1e-12
-    assert np.max(np.abs(c.point_data["K"].values[mid] - K)) <= 1e-12
     # the exact helix: K = (torsion, 0, curvature) = (c kappa, 0, kappa); M = the end moment (EI = 1 units)
     exact = np.array([helix.C * helix.KAPPA, 0.0, helix.KAPPA])
     assert np.max(np.abs(K - exact)) <= 0.03 * helix.KAPPA              # 16 elements: 2 %
     M = c.point_data["M"].values
     assert np.max(np.abs(M - exact)) <= 5e-3 * helix.KAPPA and np.max(np.ptp(M, axis=0)) <= 1e-5
+    # the exported curvature is C_M M : the strain the moments carry
+    assert np.max(np.abs(c.point_data["strain_from_M"].values - M * problem.model.C_M)) <= 1e-14
     # the state's N, M (DG1): at the middle node the mean of the element's two end values
     S = problem.space
     V, dofs = S.collapse("M")
@@ -178,7 +176,7 @@ def test_helix_strains_moments_surface_and_no_velocities(tmp_path):
     # the surface: the 1.0 x 0.5 section at every node, turned with the exported d2, d3
     surf = read_vtp(tmp_path / "surface" / "frame_00002.vtp")
     assert np.max(np.abs(surf.points.reshape(-1, 4, 3) - corners(c.points, d[1], d[2], 1.0))) <= 1e-12
-    assert set(surf.cell_data) == {"Gamma", "K", "N", "M"} and len(surf.polys) == 4 * (n - 1) + 2
+    assert set(surf.cell_data) == {"strain_from_N", "strain_from_M", "N", "M"} and len(surf.polys) == 4 * (n - 1) + 2
     assert set(surf.point_data) == {"s"}
 
 

@@ -17,6 +17,7 @@ from processes import REPO, command, environment, history, ok, popen
 from rodfem import Support
 from rodfem.app.cli import main
 from rodfem.errors import Interrupted
+from rodfem.io.output import clean_time
 from rodfem.io.vtk import read_pvd, read_vtp
 
 
@@ -361,7 +362,8 @@ def same_run(full, resumed, rtol):
     for k in header:
         largest(diffs, f"history.csv:{k}", difference(a[k], b[k]), rtol, k)
     frames = set()
-    for pvd in ("centreline.pvd", "surface.pvd"):
+    pvds = [pvd for pvd in ("centreline.pvd", "surface.pvd", "joints.pvd") if pvd in names]
+    for pvd in pvds:
         entries = read_pvd(os.path.join(full, pvd))
         assert read_pvd(os.path.join(resumed, pvd)) == entries, pvd   # times (repr), parts, files, bodies
         for *_, name, _ in entries:
@@ -377,7 +379,7 @@ def same_run(full, resumed, rtol):
                 for k in u:
                     assert u[k].components == v[k].components, (name, k)
                     largest(diffs, f"frames:{data}:{k}", difference(u[k].values, v[k].values), rtol, name)
-    assert {n for n in names if os.path.dirname(n) in ("centreline", "surface")} == frames   # none unnamed
+    assert {n for n in names if os.path.dirname(n) in ("centreline", "surface", "joints")} == frames   # none unnamed
     with open(os.path.join(full, "summary.json")) as f, open(os.path.join(resumed, "summary.json")) as g:
         s, r = json.load(f), json.load(g)
     for k in SUMMARY_NOT_COMPARED:
@@ -396,8 +398,11 @@ def same_run(full, resumed, rtol):
         with open(os.path.join(full, name), "rb") as f, open(os.path.join(resumed, name), "rb") as g:
             same, written = f.read() == g.read(), os.path.getsize(os.path.join(resumed, name)) > 0
         assert written and (same or rtol > 0), f"{name}: {'other bytes' if written else 'empty'}"
-    compared = {"history.csv", "centreline.pvd", "surface.pvd", "summary.json", "fields.json", "checkpoint.npz",
-                *frames, *PICTURES}
+    views = [name for name in ("view.py",) if name in names]     # ParaView script: its ranges from the frames
+    for name in views:
+        with open(os.path.join(full, name)) as f, open(os.path.join(resumed, name)) as g:
+            assert f.read() == g.read() or rtol > 0, name
+    compared = {"history.csv", *pvds, "summary.json", "fields.json", "checkpoint.npz", *frames, *PICTURES, *views}
     assert set(names) == compared, set(names) - compared          # every file looked at
     return diffs
 
@@ -405,12 +410,13 @@ def same_run(full, resumed, rtol):
 def consistent(path, resumed_at):
     """The run in `path` on its own: H(T) - H(0) + dissipated(T) - supplied(T) is the sum of the steps'
     balance errors (each at solver tolerance), dissipated grows at every step (a dissipating run); the
-    frames are at the levels frame_levels(n, frames) of its parameters, each time and body once, each
-    in its own file, the one at the restart `resumed_at` too (if a level), the first body's end there
-    at history.csv's `tip`; animation.gif has a picture per frame."""
+    frames are at the times frame_plan(n, frames) of its parameters (a level's time, or interpolated
+    between two levels), each time and body once, each in its own file, the one at the restart
+    `resumed_at` too (if a level), the first body's end at a level at history.csv's `tip`;
+    animation.gif has a picture per frame."""
     from PIL import Image
 
-    from rodfem.io.output import frame_levels
+    from rodfem.io.output import frame_plan
     with open(os.path.join(path, "summary.json")) as f:
         params = json.load(f)["parameters"]
     _, h = table(path)
@@ -422,22 +428,25 @@ def consistent(path, resumed_at):
     assert abs(balance - np.sum(h["balance_error"])) <= 1e-12 * scale, (balance, np.sum(h["balance_error"]))
     if "dissipated" in h:
         assert h["dissipated"][0] == 0 and np.all(np.diff(h["dissipated"]) > 0), h["dissipated"]
-    levels = sorted(frame_levels(n_steps, params["frames"]))
+    plan = frame_plan(n_steps, params["frames"])
+    levels = [n for n, theta in plan if theta == 0]
+    times = [clean_time(h["t"][n] + theta * (h["t"][n + 1] - h["t"][n]) if theta else h["t"][n]) for n, theta in plan]
     for pvd in ("centreline.pvd", "surface.pvd"):
         entries = read_pvd(os.path.join(path, pvd))
         parts = sorted({(part, name) for _, part, _, name in entries})
         assert [(t, part, name) for t, part, _, name in entries] == \
-            [(n * dt, part, name) for n in levels for part, name in parts]
+            [(t, part, name) for t in times for part, name in parts]
         assert len({f for _, _, f, _ in entries}) == len(entries)        # no file shared by two entries
-        assert sum(t == resumed_at * dt for t, *_ in entries) == (len(parts) if resumed_at in levels else 0)
+        assert sum(t == clean_time(resumed_at * dt) for t, *_ in entries) == (len(parts) if resumed_at in levels else 0)
         for t, part, file, name in entries:
             assert os.path.isfile(os.path.join(path, file)), file
-            if pvd == "centreline.pvd" and "tip_x" in h and part == 0:     # the first body's end: `tip`
+            n = int(round(t / dt))
+            if pvd == "centreline.pvd" and "tip_x" in h and part == 0 and clean_time(n * dt) == t:   # `tip`
                 end = read_vtp(os.path.join(path, file)).points[-1]
-                tip = [h[f"tip_{c}"][int(round(t / dt))] for c in "xyz" if f"tip_{c}" in h]
+                tip = [h[f"tip_{c}"][n] for c in "xyz" if f"tip_{c}" in h]
                 assert np.allclose(end[:len(tip)], tip, rtol=0, atol=1e-12 * max(np.max(np.abs(tip)), 1.0)), (t, file)
     with Image.open(os.path.join(path, "animation.gif")) as gif:
-        assert gif.n_frames == len(levels)
+        assert gif.n_frames == len(plan)
 
 
 @pytest.mark.parametrize("case, stop", [(c, s) for c in RESUMED for s in list(STOPS)[:3]]
@@ -459,12 +468,30 @@ def test_every_file_of_a_resumed_dissipating_or_actuated_run(case, stop, monkeyp
     status = json.loads((part / "summary.json").read_text())
     assert status["status"] == ("interrupted" if how == "interrupted" else "running") and status["steps"] == noted
     _, h = table(part)
-    assert len(h["t"]) == after + 1 and read_pvd(part / "centreline.pvd")[-1][0] == h["t"][after // 2 * 2]   # the
+    assert len(h["t"]) == after + 1 and read_pvd(part / "centreline.pvd")[-1][0] == clean_time(h["t"][after // 2 * 2])
     # rows and frames (at even steps) up to the stop
     run_to_the_end(scene, {}, part, resume=str(part))
     diffs = same_run(full, part, rtol=0.0)
     consistent(part, after // every * every)
     print(case, stop, {k: v for k, v in diffs.items() if v})
+
+
+def test_a_frame_between_two_levels_across_a_checkpoint(monkeypatch, tmp_path):
+    """Frames between time levels (frames = 6 over 12 steps: t_j at levels 0, 2.4, 4.8, ...): a run killed
+    one step after its checkpoint at level 2 and resumed writes the frame at level 2.4 (interpolated
+    between the checkpoint's state and the next) as the uninterrupted run does, to the bit."""
+    scene, params = RESUMED["viscoelastic-cantilever-2d"]
+    params = {**params, "checkpoint_every": 2, "frames": 6}
+    full, part = tmp_path / "full", tmp_path / "part"
+    run_to_the_end(scene, params, full)
+    with monkeypatch.context() as m:
+        stop_after(m, 3, "killed")
+        with pytest.raises(Killed):
+            run_to_the_end(scene, params, part)
+    run_to_the_end(scene, {}, part, resume=str(part))
+    same_run(full, part, rtol=0.0)
+    consistent(part, 2)
+    assert [t for t, *_ in read_pvd(part / "centreline.pvd")] == [0.0, 0.024, 0.048, 0.072, 0.096, 0.12]
 
 
 @pytest.mark.mpi

@@ -1,0 +1,366 @@
+"""Contact between bodies' centrelines (and of one body with itself), integrated energy-consistently.
+
+`System.contact(law, a, b)` places a contact law (e.g. forms/rod_contact.py) between the flexible
+bodies a and b (b None: self-contact of a).  The law gives, for segment pairs of the two centrelines
+(the polylines through the nodes of the position field), their distance d (`closest_points`), the
+reach R (the distance at which the tubes touch), the energy psi(d, R) and its difference quotient
+z = [psi(d_{n+1}) - psi(d_n)] / (d_{n+1} - d_n) (`quotient`).
+
+The step's force on the 4 nodes X = (x_i, x_{i+1}, y_j, y_{j+1}) of a segment pair is z D, with D a
+discrete gradient of the distance that also keeps the momenta:
+
+    D = grad d(X_m) + [d(X_{n+1}) - d(X_n) - grad d(X_m) . dX] P dX / |P dX|^2,   dX = X_{n+1} - X_n,
+
+P the orthogonal projector onto the complement of the rigid motions at the midpoint X_m (the six
+vectors (e_k, e_k, e_k, e_k) and (e_k x x_m,node)).  Then D . dX = d_{n+1} - d_n exactly (Gonzalez,
+"Time integration and discrete Hamiltonian systems", J Nonlinear Sci 6 (1996) 449-467, DOI
+10.1007/BF02440162: the midpoint discrete gradient, here with the correction restricted to what
+keeps the invariants, as in McLachlan, Quispel & Robidoux, "Geometric integration using discrete
+gradients", Phil Trans R Soc A 357 (1999) 1021-1045, DOI 10.1098/rsta.1999.0363), so with the
+kinematic rows x_{n+1} - x_n = h v_m at the nodes the force does the work z (d_{n+1} - d_n) =
+psi_{n+1} - psi_n: the pair's energy joins H and the balance holds to round-off.  grad d(X_m) is
+orthogonal to the rigid motions (d is invariant), and so is P dX: the forces sum to zero and have no
+moment about the origin at the midpoint positions, so the linear and angular momentum of the bodies
+are conserved exactly by the contact (the rods' own discretization conserves them).  Where
+|P dX| <= 1e-6 R (a step that moves the pair rigidly, or not at all) the correction is dropped
+(D = grad d(X_m)): its size there is O(|P dX| |dX|^2), far below round-off of the balance.
+
+Active set: every Newton iterate recomputes the segment pairs (no active set is kept): the broad
+phase finds the pairs whose bounding spheres -- about the segment's nodes at x_n AND at the iterate
+x_{n+1}, grown by the tube radius -- overlap (scipy's cKDTree on the spheres' centres: O(n log n),
+not O(n^2)), and every pair they contain that is in contact at x_n, x_m or x_{n+1} contributes.
+So the residual is one function of x_{n+1}: the sum over ALL segment pairs (the others contribute
+exactly zero, their spheres being apart), and a contact that starts or ends within a step is in the
+difference quotient.  Newton's matrix is dF/dx_{n+1} of each contributing pair by central
+differences (its entries join the matrix's pattern when a new pair appears).
+
+Under MPI the nodes of the bodies in contact are gathered on rank 0 (one scatter of the position
+dofs; rods are long and thin, so this is n_nodes x 3 numbers), which computes the pairs and adds
+their forces to the global rows; the energy and the columns are broadcast.
+
+The rows of supported (Dirichlet) nodes are left alone: their reaction takes the force.
+"""
+import time
+
+import numpy as np
+from petsc4py import PETSc
+from scipy.spatial import cKDTree
+
+from rodfem.errors import ConstraintError
+
+FD_STEP = 1e-7      # Newton's matrix: central differences with steps FD_STEP R
+RIGID_BELOW = 1e-6  # |P dX| <= RIGID_BELOW R: no correction (see the module docstring)
+
+
+def close_pairs(centres, radii):
+    """All pairs (i, j), i < j, of spheres (centres (n, 3), radii (n,)) that overlap: |c_i - c_j| <= r_i + r_j
+    (cKDTree.query_pairs within 2 max r, then the exact test).  Returns an array (m, 2)."""
+    if len(centres) < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    tree = cKDTree(centres)
+    pairs = tree.query_pairs(2.0 * float(np.max(radii)), output_type="ndarray")
+    if len(pairs):
+        gap = np.linalg.norm(centres[pairs[:, 0]] - centres[pairs[:, 1]], axis=1)
+        pairs = pairs[gap <= radii[pairs[:, 0]] + radii[pairs[:, 1]]]
+    return pairs.astype(np.int64)
+
+
+def segment_spheres(*positions, grow=0.0):
+    """Bounding spheres of the segments (i, i+1) of node positions (each (n, 3)) over all the given
+    configurations, grown by `grow` (a number or an array per segment): (centres, radii)."""
+    pts = np.concatenate([np.stack([x[:-1], x[1:]], axis=1) for x in positions], axis=1)   # (n-1, 2k, 3)
+    c = pts.mean(axis=1)
+    r = np.max(np.linalg.norm(pts - c[:, None, :], axis=2), axis=1)
+    return c, r + grow
+
+
+def rigid_projection(dX, Xm):
+    """P dX for the configurations Xm (n, m, 3) and increments dX (n, m, 3): dX less its part in the
+    span of the rigid motions at Xm, the translation t + rotation w x (x - c) about the nodes' centroid c
+    (orthogonal projection: t = the mean of dX, J w = sum (x - c) x dX with J = sum |x - c|^2 I - (x - c)(x - c)^T,
+    regularized by 1e-14 tr J: nodes on a line have no rotation about it, and neither has dX's part)."""
+    rel = Xm - Xm.mean(axis=1, keepdims=True)
+    r2 = np.einsum("nij,nij->n", rel, rel)
+    J = r2[:, None, None] * np.eye(3) - np.einsum("nia,nib->nab", rel, rel) + 1e-14 * r2[:, None, None] * np.eye(3)
+    w = np.linalg.solve(J, np.cross(rel, dX).sum(axis=1)[:, :, None])[:, :, 0]
+    return dX - dX.mean(axis=1, keepdims=True) - np.cross(w[:, None, :], rel)
+
+
+class Centreline:
+    """A flexible body's centreline nodes: the global indices of their positions q and velocities v
+    (n_nodes x 3 each) and arc lengths s, sorted along the body (on every rank)."""
+
+    def __init__(self, ref, layout, i):
+        body = ref.body
+        model = body.model
+        position = getattr(model, "position", None)
+        velocity = getattr(model, "kinematics", {}).get(position)
+        if body.rigid or velocity is None or tuple(body.space.field(position).shape) != (3,):
+            raise ConstraintError(f"contact with body {ref.name}: it must be a 3D rod or string (a centreline "
+                                  "of 3 coordinates); rigid and planar bodies are not supported")
+        if body.space.field(position).family != "P" or body.space.field(velocity).family != "P":
+            raise ConstraintError(f"contact with body {ref.name}: its position must be a continuous (P) field")
+        l2g = layout.local_to_global(i)
+        own = layout.sizes[i]
+        tables = []
+        for name in (position, velocity):
+            Vi, dofs = body.space.collapse(name)
+            dofs = dofs.reshape(-1, 3)
+            s = Vi.tabulate_dof_coordinates()[: len(dofs), 0]
+            owned = np.all(dofs < own, axis=1)
+            tables.append((s[owned], l2g[dofs[owned]]))
+        comm = layout.comm
+        (s, q), (sv, v) = ([np.concatenate(a) for a in zip(*comm.allgather(t))] for t in tables)
+        s, keep = np.unique(np.round(s, 12), return_index=True)
+        q = q[keep]
+        sv, keep_v = np.unique(np.round(sv, 12), return_index=True)
+        if len(sv) != len(s) or not np.allclose(sv, s):   # pragma: no cover - the same element for both
+            raise ConstraintError(f"contact with body {ref.name}: its position and velocity nodes differ")
+        self.name, self.s, self.q, self.v = ref.name, s, q, v[keep_v]
+
+
+class Pairing:
+    """One contact law between two centrelines (b None: one centreline with itself)."""
+
+    def __init__(self, law, a, b, name):
+        self.law, self.a, self.b, self.name = law, a, b, name
+        self.self_contact = b is None
+        self.R = float(law.reach(self.self_contact))
+
+    def candidates(self, nodes_a, nodes_b, configurations):
+        """Segment pairs (i of a, j of b) whose spheres over `configurations` (indices into the node
+        arrays' list) overlap."""
+        ra, rb = self.law.radii if not self.self_contact else (self.law.radii[0],) * 2
+        ca, rad_a = segment_spheres(*[nodes_a[k] for k in configurations], grow=ra)
+        if self.self_contact:
+            pairs = close_pairs(ca, rad_a)
+            s = self.a.s
+            sep = s[pairs[:, 1]] - s[pairs[:, 0] + 1]   # arc length between the segments (i < j)
+            return pairs[(sep >= self.law.exclude) & (pairs[:, 1] > pairs[:, 0] + 1)]
+        cb, rad_b = segment_spheres(*[nodes_b[k] for k in configurations], grow=rb)
+        na = len(ca)
+        pairs = close_pairs(np.vstack([ca, cb]), np.concatenate([rad_a, rad_b]))
+        pairs = pairs[(pairs[:, 0] < na) & (pairs[:, 1] >= na)]
+        pairs[:, 1] -= na
+        return pairs
+
+    def stack(self, nodes_a, nodes_b, pairs):
+        """The pairs' node positions (m, 4, 3): x_i, x_{i+1}, y_j, y_{j+1}."""
+        nb = nodes_a if self.self_contact else nodes_b
+        i, j = pairs[:, 0], pairs[:, 1]
+        return np.stack([nodes_a[i], nodes_a[i + 1], nb[j], nb[j + 1]], axis=1)
+
+    def weights(self, pairs):
+        """The pairs' weights min(1, l_i / zone) min(1, l_j / zone) (l: the segments' lengths along the rods
+        at rest; 1 for every pair without a zone): segments shorter than the contact zone share it."""
+        zone = float(getattr(self.law, "zone", 0.0))
+        if zone <= 0.0 or not len(pairs):
+            return np.ones(len(pairs))
+        la = np.diff(self.a.s)[pairs[:, 0]]
+        lb = np.diff((self.a if self.self_contact else self.b).s)[pairs[:, 1]]
+        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)
+
+    def indices(self, pairs, which):
+        """Global indices (m, 4, 3) of the pairs' nodes' q or v dofs."""
+        A = getattr(self.a, which)
+        B = A if self.self_contact else getattr(self.b, which)
+        i, j = pairs[:, 0], pairs[:, 1]
+        return np.stack([A[i], A[i + 1], B[j], B[j + 1]], axis=1)
+
+    def distance(self, X):
+        d, a, b, n = self.law_points(X)
+        return d
+
+    def law_points(self, X):
+        """The law's closest points (d, a, b, n) of the pairs' segments X (m, 4, 3)."""
+        return self.law.closest_points(X[:, 0], X[:, 1], X[:, 2], X[:, 3])
+
+    def gradient(self, X):
+        """(d, grad d (m, 4, 3)) at X by the envelope theorem."""
+        d, a, b, n = self.law_points(X)
+        w = np.stack([1.0 - a, a, b - 1.0, -b], axis=1)
+        return d, w[:, :, None] * n[:, None, :]
+
+    def force(self, X0, X1, rule="discrete-gradient"):
+        """z D (m, 4, 3): the step's force on the pairs' nodes (the module docstring); the midpoint rule's
+        psi'(d(X_m)) grad d(X_m) with rule 'midpoint'."""
+        Xm = 0.5 * (X0 + X1)
+        if rule == "midpoint":
+            d, grad = self.gradient(Xm)
+            return self.law.slope(d, self.R)[:, None, None] * grad
+        d0, d1 = self.distance(X0), self.distance(X1)
+        _, grad = self.gradient(Xm)
+        dX = X1 - X0
+        P = rigid_projection(dX, Xm)
+        nP2 = np.einsum("nij,nij->n", P, P)
+        bracket = (d1 - d0) - np.einsum("nij,nij->n", grad, dX)
+        use = nP2 > (RIGID_BELOW * self.R) ** 2
+        c = np.where(use, bracket / np.where(use, nP2, 1.0), 0.0)
+        D = grad + c[:, None, None] * P
+        z = self.law.quotient(d0, d1, self.R)
+        return z[:, None, None] * D
+
+    def jacobian(self, X0, X1, rest=False, rule="discrete-gradient"):
+        """d(z D)/dX1 (m, 12, 12) by central differences (`rest`: X0 = X1 moves too, the Hessian of V)."""
+        m = len(X0)
+        step = FD_STEP * max(self.R, 1e-12)
+        E = np.eye(12).reshape(12, 4, 3) * step
+        plus = (X1[:, None] + E[None]).reshape(-1, 4, 3)
+        minus = (X1[:, None] - E[None]).reshape(-1, 4, 3)
+        if rest:
+            diff = (self.force(plus, plus, rule) - self.force(minus, minus, rule)).reshape(m, 12, 12) / (2 * step)
+            return np.transpose(diff, (0, 2, 1))
+        base = np.repeat(X0, 12, axis=0)
+        diff = (self.force(base, plus, rule) - self.force(base, minus, rule)).reshape(m, 12, 12) / (2 * step)
+        return np.transpose(diff, (0, 2, 1))    # [pair, row (force component), column (coordinate)]
+
+
+class BodyContacts:
+    """The contact laws placed by `System.contact`, as a coupling of rodfem/fem/assembly.py (forces on the
+    momentum rows at global indices, computed on rank 0); `step`, `energy`, `observe` for the system."""
+
+    def __init__(self, items, refs, layout, fixed, X, rule="discrete-gradient", rest=False):
+        """rule: the system's integrator ('midpoint': the force psi'(d(X_m)) grad d(X_m), not energy-consistent);
+        rest: statics (rodfem/analysis/statics.py) -- the force grad V(x) of the iterate, x_n = x_{n+1}."""
+        self.comm, self.fixed, self.rule, self.rest = layout.comm, fixed, rule, rest
+        index = {id(r): k for k, r in enumerate(refs)}
+        lines = {}
+        for law, a, b, name in items:
+            for ref in (a, b):
+                if ref is not None and id(ref) not in lines:
+                    lines[id(ref)] = Centreline(ref, layout, index[id(ref)])
+        self.lines = list(lines.values())
+        self.pairings = [Pairing(law, lines[id(a)], None if b is None else lines[id(b)], name)
+                         for law, a, b, name in items]
+        wanted = np.concatenate([ln.q.ravel() for ln in self.lines]).astype(PETSc.IntType)
+        self.at, k = [], 0
+        for ln in self.lines:
+            self.at.append((k, len(ln.s)))
+            k += 3 * len(ln.s)
+        root = self.comm.rank == 0
+        self.gathered = PETSc.Vec().createSeq(len(wanted) if root else 0, comm=PETSc.COMM_SELF)
+        is_from = PETSc.IS().createGeneral(wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(X, is_from, self.gathered, None)
+        self.x0 = None
+        self._terms = []
+        self.work = self.dissipated = 0.0
+        self.seconds = {"search": 0.0, "forces": 0.0, "matrix": 0.0}   # rank 0's CPU time in the contact (benchmarks)
+
+    def nodes(self, X):
+        """{id(line): node positions (n, 3)} of the state X (rank 0; None elsewhere)."""
+        self.scatter.scatter(X, self.gathered, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        if self.comm.rank != 0:
+            return None
+        vals = self.gathered.getArray(readonly=True)
+        return {id(ln): vals[k:k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
+
+    def step(self, X0):
+        """The step from x_n = X0 (collective)."""
+        self.x0 = self.nodes(X0)
+
+    # -- the coupling's contract (rodfem/fem/assembly.py) -----------------------------------------
+    def entries(self):
+        return []   # the pairs' entries join the pattern when they appear
+
+    def _active(self, p, x0, x1):
+        """The pairs of pairing p in contact at x_n, x_m or x_{n+1}: (pairs, X0, X1)."""
+        a, b = id(p.a), None if p.self_contact else id(p.b)
+        nodes = [(x0[a], x1[a], 0.5 * (x0[a] + x1[a])), None if b is None else (x0[b], x1[b], 0.5 * (x0[b] + x1[b]))]
+        pairs = p.candidates(nodes[0], nodes[1], (0, 1))
+        X0 = p.stack(x0[a], None if b is None else x0[b], pairs)
+        X1 = p.stack(x1[a], None if b is None else x1[b], pairs)
+        near = np.minimum.reduce([p.distance(X) for X in (X0, X1, 0.5 * (X0 + X1))]) < p.R if len(pairs) else []
+        return pairs[near], X0[near], X1[near], p.weights(pairs[near])
+
+    def update(self, X):
+        start = time.process_time()
+        x1 = self.nodes(X)
+        if self.rest:
+            self.x0 = x1
+        self._terms = []
+        if self.comm.rank == 0:
+            for p in self.pairings:
+                pairs, X0, X1, w = self._active(p, self.x0, x1)
+                if len(pairs):
+                    self._terms.append((p, pairs, X0, X1, w))
+        self.seconds["search"] += time.process_time() - start
+
+    def residual(self, X, b):
+        start = time.process_time()
+        for p, pairs, X0, X1, w in self._terms:
+            rows = p.indices(pairs, "v").ravel()
+            vals = (w[:, None, None] * p.force(X0, X1, self.rule)).ravel()
+            keep = np.array([int(r) not in self.fixed for r in rows], dtype=bool)
+            b.setValues(rows[keep].astype(PETSc.IntType), np.ascontiguousarray(vals[keep]), addv=PETSc.InsertMode.ADD)
+        self.seconds["forces"] += time.process_time() - start
+
+    def jacobian(self, X, A):
+        start = time.process_time()
+        for p, pairs, X0, X1, w in self._terms:
+            rows, cols = p.indices(pairs, "v").reshape(-1, 12), p.indices(pairs, "q").reshape(-1, 12)
+            blocks = w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule)
+            for r, c, block in zip(rows, cols, blocks):
+                rk = [k for k, g in enumerate(r) if int(g) not in self.fixed]
+                ck = [k for k, g in enumerate(c) if int(g) not in self.fixed]
+                if rk and ck:
+                    A.setValues(r[rk].astype(PETSc.IntType), c[ck].astype(PETSc.IntType),
+                                np.ascontiguousarray(block[np.ix_(rk, ck)]), addv=PETSc.InsertMode.ADD)
+        self.seconds["matrix"] += time.process_time() - start
+
+    # -- the system's view ------------------------------------------------------------------------
+    def _state(self, X):
+        """Per pairing: (pairs, d, grad d, weights) of the segment pairs in contact at the state X (rank 0)."""
+        x = self.nodes(X)
+        out = []
+        if self.comm.rank == 0:
+            for p in self.pairings:
+                a, b = id(p.a), None if p.self_contact else id(p.b)
+                pairs = p.candidates((x[a],), None if b is None else (x[b],), (0,))
+                Xs = p.stack(x[a], None if b is None else x[b], pairs)
+                d, grad = p.gradient(Xs) if len(pairs) else (np.zeros(0), np.zeros((0, 4, 3)))
+                near = d < p.R
+                out.append((pairs[near], d[near], grad[near], p.weights(pairs[near])))
+        return out
+
+    def energy(self, X) -> float:
+        """The contacts' stored energy at the state X (collective, the same on every rank)."""
+        states = self._state(X)
+        V = sum(float(np.sum(w * p.law.energy(d, p.R))) for p, (_, d, _, w) in zip(self.pairings, states)) \
+            if self.comm.rank == 0 else 0.0
+        return self.comm.bcast(V, root=0)
+
+    def observe(self, X) -> dict:
+        """name.energy, name.N (the sum of the pairs' normal forces -psi'), name.Fn_x, _y, _z (the contact
+        force on body a; zero for self-contact), name.penetration (the largest <R - d>), name.active (the
+        number of segment pairs in contact) of the state X (collective); the pairs weighted as in V."""
+        states = self._state(X)
+        obs = {}
+        if self.comm.rank == 0:
+            for p, (pairs, d, grad, w) in zip(self.pairings, states):
+                slope = w * p.law.slope(d, p.R)
+                on_a = -np.einsum("n,nk->k", slope, grad[:, 0] + grad[:, 1]) if not p.self_contact else np.zeros(3)
+                obs[f"{p.name}.energy"] = float(np.sum(w * p.law.energy(d, p.R)))
+                obs[f"{p.name}.N"] = float(-np.sum(slope))
+                for c, f in zip("xyz", on_a):
+                    obs[f"{p.name}.Fn_{c}"] = float(f)
+                obs[f"{p.name}.penetration"] = float(np.max(p.R - d, initial=0.0))
+                obs[f"{p.name}.active"] = float(len(pairs))
+        return self.comm.bcast(obs, root=0)
+
+
+def fixed_dofs(system, layout):
+    """The global indices of the bodies' Dirichlet dofs (the same set on every rank)."""
+    fixed = []
+    for i, r in enumerate(system.bodies.values()):
+        own = layout.sizes[i]
+        for bc in r.body.bcs:
+            dofs, n_owned = bc.dof_indices()
+            fixed += [layout.start + layout.offsets[i] + int(d) for d in dofs[:n_owned] if d < own]
+    return set(np.concatenate(system.comm.allgather(np.array(fixed, dtype=np.int64))).tolist())
+
+
+def check_law(law, what):
+    """Refuse what is not a contact law (the engine names no model: it checks what it calls)."""
+    for attr in ("reach", "energy", "slope", "quotient", "closest_points", "radii", "exclude"):
+        if not hasattr(law, attr):
+            raise ConstraintError(f"{what}: {law!r} is not a rod contact law (e.g. forms/rod_contact.py's RodContact)")
