@@ -129,7 +129,7 @@ class BodyBlock:
             bl.set(0.0)
         fpetsc.assemble_vector(self.b, self.F)
         if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
-            fpetsc.apply_lifting(self.b, [self.J], bcs=[self.bcs], x0=[self.vec], scale=-1.0)
+            fpetsc.apply_lifting(self.b, [self.J], [self.bcs], [self.vec], -1.0)   # (the scale: `scale` in 0.5, `alpha` in 0.9)
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         if self.bcs:
             fpetsc.set_bc(self.b, self.bcs, self.vec, -1.0)

@@ -24,7 +24,7 @@ integrals without dof transformations (`FastJacobian.usable`).
 """
 import numpy as np
 
-from rodfem.fem import cbuild
+from rodfem.fem import cbuild, compat
 from rodfem.fem.fastassembly import C_DECL, C_SOURCE, form_integrals
 
 COPY_SOURCE = r"""
@@ -79,7 +79,7 @@ def batchable(form) -> bool:
     from dolfinx.fem import IntegralType
     if form is None or form.mesh.comm.size != 1:
         return False
-    spaces = list(form.function_spaces) + [c.function_space for c in form.coefficients]
+    spaces = list(form.function_spaces) + [c.function_space for c in compat.cpp_form(form).coefficients]
     return (set(form.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet}
             and all(not V.element.needs_dof_transformations for V in spaces))
 
@@ -87,13 +87,12 @@ def batchable(form) -> bool:
 def kernel_key(form):
     """Forms with the same key run the same kernels (one compiled module) on the same layout."""
     return tuple((itype, i, address) for itype, i, address, _, _ in form_integrals(form)) + (
-        len(form.coefficients), tuple(V.dofmap.dof_layout.num_dofs for V in form.function_spaces))
+        len(compat.cpp_form(form).coefficients), tuple(V.dofmap.dof_layout.num_dofs for V in form.function_spaces))
 
 
 def _cell_dofs(V):
     dm = V.dofmap
-    dofs = (dm.list() if callable(dm.list) else dm.list).array
-    return np.asarray(dofs, dtype=np.int64).reshape(-1, dm.dof_layout.num_dofs), dm.bs
+    return np.asarray(compat.dofmap_array(dm), dtype=np.int64).reshape(-1, dm.dof_layout.num_dofs), dm.bs
 
 
 class FormBatch:
@@ -117,9 +116,9 @@ class FormBatch:
         for f in self.forms:
             g = f.mesh.geometry
             xs.append(np.asarray(g.x, dtype=np.float64))
-            offs = g.dofmap.offsets
-            self.nx = int(offs[1] - offs[0])
-            xdofs.append(np.asarray(g.dofmap.array, dtype=np.int64) + nodes)
+            cell_nodes = compat.geometry_dofmap(f.mesh)
+            self.nx = int(cell_nodes.shape[1])
+            xdofs.append(np.asarray(cell_nodes, dtype=np.int64).reshape(-1) + nodes)
             nodes += len(g.x)
         self.x = np.ascontiguousarray(np.concatenate(xs))
         self.xdofs = np.ascontiguousarray(np.concatenate(xdofs), dtype=np.int32)
@@ -164,7 +163,7 @@ class FormBatch:
         coefficient by coefficient, dof by dof, component by component)."""
         cols = []
         ncell = self.cell_start[b + 1] - self.cell_start[b]
-        for c in form.coefficients:
+        for c in compat.cpp_form(form).coefficients:
             dofs, bs = _cell_dofs(c.function_space)
             slots = (bs * dofs[:, :, None] + np.arange(bs)[None, None, :]).reshape(len(dofs), -1)
             if np.shares_memory(c.x.array, iterate.x.array):
@@ -191,13 +190,12 @@ class FormBatch:
 
     def _check(self, iterates, offsets):
         """The gathered coefficients equal DOLFINx's packing, body by body (else ValueError)."""
-        import dolfinx.cpp as cpp
         X = np.zeros(self.size)
         for b, x in enumerate(iterates):
             X[offsets[b]:offsets[b] + len(x.x.array)] = x.x.array
         self._coefficients(X)
         for b, f in enumerate(self.forms):
-            packed = cpp.fem.pack_coefficients(f)
+            packed = compat.pack_coefficients(f)
             for it in self.integrals:
                 mine = it["coeffs"][:it["n"] * it["cstride"]].reshape(it["n"], -1)[it["body"] == b]
                 theirs = np.asarray(packed[it["key"]]).reshape(len(mine), -1)
@@ -208,13 +206,12 @@ class FormBatch:
         """Views of the constants' values (in the kernels' order, when the compiled forms list their
         constants: rodfem/fem/jit.py) and of the other coefficients' values: `refresh` copies them
         with one call each.  Checked against DOLFINx's packing, else packed body by body."""
-        import dolfinx.cpp as cpp
         comm = self.forms[0].mesh.comm
         views = [np.asarray(o.x.array) for o in self.others]
         self._other_views = Segments(None, self.size + np.concatenate([[0], np.cumsum([len(v) for v in views])])[:-1],
                                      [len(v) for v in views], comm, arrays=views) if views else None
         self._const_views = None
-        packed = [np.asarray(cpp.fem.pack_constants(f), dtype=np.float64) for f in self.forms]
+        packed = [np.asarray(compat.pack_constants(f), dtype=np.float64) for f in self.forms]
         self.kstride = len(packed[0])
         self.consts = np.ascontiguousarray(np.concatenate(packed)) if self.kstride else np.zeros(1)
         self._p["consts"] = self.mod.ffi.from_buffer("double[]", self.consts)
@@ -232,8 +229,7 @@ class FormBatch:
         if self._const_views is not None:   # (one C call: copies of the constants' values)
             self._const_views.get(self.consts)
         elif self.kstride:
-            import dolfinx.cpp as cpp
-            self.consts[:] = np.concatenate([cpp.fem.pack_constants(f) for f in self.forms])
+            self.consts[:] = np.concatenate([compat.pack_constants(f) for f in self.forms])
         if self._other_views is not None:
             self._other_views.get(self.S)
 

@@ -33,7 +33,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rodfem.fem import cbuild, petsc_raw
+from rodfem.fem import cbuild, compat, petsc_raw
 
 SPARSE_ENOUGH = 1 / 3   # keep the pattern of possible nonzeros when it has at most this share of DOLFINx's
 DRAWS = (1.0, 1e-3)     # scales of the random states that find the possible nonzeros
@@ -260,16 +260,12 @@ def form_integrals(form):
     integrals first (the order of DOLFINx's assembly)."""
     from dolfinx.fem import IntegralType
     ffi = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, form.mesh.comm).ffi
-    ufcx = form.ufcx_form
     codes = {IntegralType.cell: 0, IntegralType.exterior_facet: 1}
     out = []
     for itype in sorted(form.integral_types, key=lambda t: codes[t]):
-        code = codes[itype]
-        uids = [ufcx.integral_ids(code)[k] for k in range(ufcx.num_integrals(code))]
-        for i in form.integral_ids(itype):
-            integral = ufcx.integrals(code)[uids.index(i)]
-            address = int(ffi.cast("uintptr_t", integral.tabulate_tensor_float64))
-            dom = np.asarray(form.domains(itype, i), dtype=np.int32)
+        for i in compat.integral_ids(form, itype):
+            address = int(ffi.cast("uintptr_t", compat.kernel(form, itype, i).tabulate_tensor_float64))
+            dom = np.asarray(compat.integration_domain(form, itype, i), dtype=np.int32)
             if itype == IntegralType.cell:
                 cells, facets = np.ascontiguousarray(dom.reshape(-1)), None
             else:
@@ -317,12 +313,11 @@ class FastJacobian:
         self.mod = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, V.mesh.comm)
         self.V = V
         mesh = V.mesh
-        dofmap_list = V.dofmap.list() if callable(V.dofmap.list) else V.dofmap.list
-        self.dofs = np.ascontiguousarray(dofmap_list.array, dtype=np.int32)
+        self.dofs = np.ascontiguousarray(compat.dofmap_array(V.dofmap), dtype=np.int32).reshape(-1)
         self.nd = V.dofmap.dof_layout.num_dofs
-        self.xdofs = np.ascontiguousarray(mesh.geometry.dofmap.array, dtype=np.int32)
-        offsets = mesh.geometry.dofmap.offsets
-        self.nx = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 0   # (a rank without cells: none)
+        xdofs = compat.geometry_dofmap(mesh)
+        self.xdofs = np.ascontiguousarray(xdofs, dtype=np.int32).reshape(-1)
+        self.nx = xdofs.shape[1] if xdofs.size else 0   # (a rank without cells: none)
         assert self.nx <= 64
         im = V.dofmap.index_map
         self.nown, nghost = im.size_local, im.num_ghosts
@@ -453,9 +448,8 @@ class FastJacobian:
 
     def _packed(self):
         """The form's coefficients (dict by integral) and constants, as the kernels take them."""
-        import dolfinx.cpp as cpp
-        coeffs = cpp.fem.pack_coefficients(self.J)
-        consts = np.ascontiguousarray(cpp.fem.pack_constants(self.J), dtype=np.float64)
+        coeffs = compat.pack_coefficients(self.J)
+        consts = np.ascontiguousarray(compat.pack_constants(self.J), dtype=np.float64)
         return coeffs, consts
 
     def add(self, A):
