@@ -371,7 +371,7 @@ class BlockBatch:
         for blk in self.lifted:
             with blk.b.localForm() as bl:
                 bl.set(0.0)
-            fpetsc.apply_lifting(blk.b, [blk.J], bcs=[blk.bcs], x0=[blk.vec], scale=-1.0)
+            fpetsc.apply_lifting(blk.b, [blk.J], [blk.bcs], [blk.vec], -1.0)   # (the scale: `scale` in 0.5, `alpha` in 0.9)
             b[blk.lo:blk.hi] += blk.b.array_r[: blk.hi - blk.lo]
 
     def add_jacobian(self, A, X):
