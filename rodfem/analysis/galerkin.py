@@ -26,12 +26,12 @@ solved by Newton in xi (the reduced Jacobian V^T (dF/dx) V).  Why the energy bal
 are tested with v_m = Phi b_m (in range, as v is); the strain rows with the projected effort
 n = Psi m (in range); the effort rows int (n - grad W) . tau = 0 with tau = e_{n+1} - e_n = Psi (c_{n+1} - c_n)
 (in range), so int n . (e_{n+1} - e_n) = int grad W . (e_{n+1} - e_n) = W_{n+1} - W_n for the
-discrete gradient (for the midpoint rule when W is quadratic).  The reduced model therefore is
-the port-Hamiltonian system of Chaturantabut, Beattie & Gugercin, "Structure-preserving model
-reduction for nonlinear port-Hamiltonian systems", SIAM J. Sci. Comput. 38(5) (2016) B837-B865,
-doi:10.1137/15M1055085 (their POD variant: J_r = V^T J V, grad H_r(xi) = V^T grad H(x_ref + V xi),
-B_r = V^T B, y_r = B_r^T z_r), with the Hamiltonian H_r(xi) = H(x_ref + V xi) and the full model's
-discrete gradient restricted to range(V):
+discrete gradient (for the midpoint rule when W is quadratic).  This is the structure-preserving
+projection of Chaturantabut, Beattie & Gugercin, "Structure-preserving model reduction for nonlinear
+port-Hamiltonian systems", SIAM J. Sci. Comput. 38(5) (2016) B837-B865, doi:10.1137/15M1055085 (POD
+bases, the reduced Hamiltonian H_r(xi) = H(x_ref + V xi), the structure operators and the input map
+projected so that the reduced model is port-Hamiltonian again), here carried out on the weak form of
+the step, block by block, with the full model's discrete gradient restricted to range(V):
 
     H_r(xi_{n+1}) - H_r(xi_n) = h y_r . u       (y_r = the port's output at the reduced states)
 
