@@ -48,7 +48,7 @@ def main():
     write_report("tendon_arm_dynamic", rows, [
         ("n_elements", "{}", "elements"), ("mode", "{}"), ("dt", "{:g}", "dt (adaptive: first)"), ("rtol", "{}"),
         ("steps", "{}"), ("rejected", "{}"), ("time_s", "{:.2f}", "time s"), *tips,
-        ("balance", "{:.1e}", "max balance / max|H|")],
+        ("balance", "{:.1e}", "max balance / max \\|H\\|")],
         title="tendon-arm-dynamic: the tip at t = 1, 2, 3 s",
         intro=["The soromox tendon benchmark (L = 0.6, r = 0.03, E = 1 MPa, nu = 0.5, rho = 1000, tau_kv = eta/G = "
                "0.03 s, two tendons at 0.02 m with 1 N, gravity -9.81 e_z; discrete gradient).  x = y by symmetry "
