@@ -10,6 +10,7 @@ first mode (log decrement, omega_1 from the linearization).
 import numpy as np
 import pytest
 from mpi4py import MPI
+from processes import ok, summary
 
 from rodfem import run
 from rodfem.analysis.linearize import Linearization, natural_modes
@@ -102,3 +103,27 @@ def test_first_mode_damping_ratio():
     theory = p["tau_kv"] * omega[0] / 2
     print(f"omega {omega}, zeta {zeta:.4f}, theory {theory:.4f}")
     assert zeta == pytest.approx(theory, rel=0.02)
+
+
+def test_bad_input_is_one_line(capsys):
+    from rodfem.app.cli import main
+    for name, value, what in (("tau_kv", "-1", "tau_kv"), ("rayleigh_alpha", "nan", "rayleigh_alpha"),
+                              ("offset", "0.04", "leaves the cross-section"), ("tension1", "-1", "tension")):
+        capsys.readouterr()
+        assert main(["run", "tendon-arm-dynamic", "--set", f"{name}={value}", "--set", "t_end=0.02",
+                     "--quiet"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and what in err[0], err
+
+
+@pytest.mark.mpi
+def test_serial_and_two_ranks_agree(tmp_path, rodfem):
+    """6 elements, 30 steps of the falling arm: mpirun -n 2 = serial to solver tolerance."""
+    args = ["run", "tendon-arm-dynamic", "--set", "n_elements=6", "--set", "dt=0.05", "--set", "t_end=1.5", "--quiet"]
+    ok(rodfem(*args, "--out", tmp_path / "s"))
+    ok(rodfem(*args, "--out", tmp_path / "p", np=2))
+    s, q = summary(tmp_path / "s"), summary(tmp_path / "p")
+    assert q["mpi_ranks"] == 2
+    for k in ("H", "supplied", "dissipated", "tip_x", "tip_y", "tip_z", "length_tendon1", "length_tendon2"):
+        assert abs(s["final"][k] - q["final"][k]) <= 1e-9 * max(1e-3, abs(s["final"][k])), k
+    assert s["final"]["tip_x"] > 0.1            # it fell
