@@ -16,8 +16,11 @@
    (discrete gradient) relative to max |H|.
 
     .venv/bin/python benchmarks/bench_stepping.py --systems-only   # -> benchmarks/stepping_systems.{csv,md}
+    .venv/bin/python benchmarks/bench_stepping.py --plot-only      # stepping_wp.png from the committed CSVs
 """
+import csv
 import time
+from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
@@ -133,7 +136,8 @@ def wp_report(rows):
                "1e-3 and 1e-5 (stepping_systems.md).  four-bar-2d's steps hardly depend on rtol: its steel beams' "
                "strains (|kappa| ~ 1e-4) are measured against atol = 1e-6 and their fast vibrations resolved; "
                "flying-spaghetti-3d's are set by the axial vibrations of its stress resultants N "
-               "(docs/guide/adaptive-steps.md)."],
+               "(docs/guide/adaptive-steps.md).", "",
+               "![Error against wall time, fixed and adaptive steps](stepping_wp.png)"],
         title="Work against precision: fixed and adaptive steps",
         intro=["The error of the recorded positions at t_end against a fixed-step reference with a quarter of the "
                "finest fixed step, relative to their largest size; adaptive runs start with the coarsest fixed step "
@@ -172,6 +176,7 @@ def systems():
         ("wall_s", "{:.2f}", "time s"), ("error", "{:.2e}", "error at t_end"),
         ("balance_rel", "{:.1e}", "max balance / max|H|")],
         title="Adaptive steps on systems: four-bar-2d (T = 2) and crane-manoeuvre (T = 6)",
+        notes=["The work–precision plot of these runs beside stepping_wp.md's: [stepping_wp.png](stepping_wp.png)."],
         intro=["The error of the recorded positions at t_end against a fixed-step reference (four-bar: dt = 0.02/32, "
                "crane: 0.05/64), relative to their largest size; adaptive runs start with the default step (atol = 1e-6, "
                "the error per step); dt=auto starts with t_end/10 (one output interval).  Both scenes with the "
@@ -179,8 +184,45 @@ def systems():
                "of each doubling and the rejected ones included)."])
 
 
+def read_csv(name):
+    with open(Path(__file__).with_name(f"{name}.csv")) as f:
+        return list(csv.DictReader(f))
+
+
+def plot():
+    """stepping_wp.png: error at t_end against wall time, one panel per scene, fixed steps and adaptive
+    tolerances (stepping_wp.csv; and, for four-bar-2d and crane-manoeuvre, the runs of stepping_systems.csv
+    against their finer reference)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    sets = [("stepping_wp", ""), ("stepping_systems", " (finer ref.)")]
+    scenes = list(dict.fromkeys(r["scene"] for r in read_csv("stepping_wp")))
+    cols = 2
+    fig, axes = plt.subplots((len(scenes) + cols - 1) // cols, cols, figsize=(9.5, 3.6 * ((len(scenes) + 1) // 2)))
+    styles = {"fixed": "o-", "adaptive": "s--", "dt=auto": "^"}
+    for ax, scene in zip(np.ravel(axes), scenes):
+        for name, suffix in sets:
+            rows = [r for r in read_csv(name) if r["scene"] == scene and r["mode"] in styles]
+            for mode, style in styles.items():
+                pts = sorted((float(r["wall_s"]), float(r["error"])) for r in rows if r["mode"] == mode
+                             and np.isfinite(float(r["wall_s"])) and float(r["error"]) > 0)
+                if pts:
+                    ax.loglog(*zip(*pts), style, fillstyle="none" if suffix else "full", label=mode + suffix)
+        ax.set_title(scene)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("error of the positions at t_end")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(Path(__file__).with_name("stepping_wp.png"), dpi=110)
+
+
 if __name__ == "__main__":
     import sys
+    if "--plot-only" in sys.argv:
+        plot()
+        sys.exit()
     if "--systems-only" in sys.argv:
         systems()
         sys.exit()
@@ -189,3 +231,4 @@ if __name__ == "__main__":
     if "--arm-only" not in sys.argv:
         work_precision()
         systems()
+    plot()

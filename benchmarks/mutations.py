@@ -60,6 +60,7 @@ ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
+TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
@@ -867,6 +868,28 @@ MUTATIONS = [
         'for t, _, f, _ in read_pvd(os.path.join(out, "surface.pvd"))[:1]:')],
       ["tests/io/test_output_physics.py::test_view_script_has_the_ranges_of_all_frames"],
       "view.py's colour ranges those of the first frame (a run from rest: [0, 0])"),
+    # -- tendon-arm-dynamic: the soromox tendon benchmark (issue 25) ------------------------------------
+    M("tendon-arm-dynamic-shear-modulus", "demos/tendon_arm_dynamic.py",
+      [('E, G = p["E"], p["E"] / (2 * (1 + p["nu"]))', 'E, G = p["E"], p["E"] / (2 * p["nu"])')],
+      [f"{TENDON_DYN}::test_tau_kv_is_soromox_eta_over_G"],
+      "G = E/(2 nu) instead of E/(2 (1 + nu)): tau_kv = eta/G no longer soromox's D"),
+    M("tendon-arm-dynamic-no-damping", "demos/tendon_arm_dynamic.py",
+      [("arm = cosserat_rod.CosseratRod(rhoA, rhoJ, C_N, C_M, damping=kv)",
+        "arm = cosserat_rod.CosseratRod(rhoA, rhoJ, C_N, C_M, damping=None)")],
+      [f"{TENDON_DYN}::test_falls_over_with_the_exact_balance", f"{TENDON_DYN}::test_first_mode_damping_ratio"],
+      "the scene's Kelvin-Voigt damping not passed to the rod"),
+    M("tendon-arm-dynamic-tendons-opposite", "demos/tendon_arm_dynamic.py",
+      [('actuators.on_circle(p["offset"], i * np.pi / 2)', 'actuators.on_circle(p["offset"], i * np.pi)')],
+      [f"{TENDON_DYN}::test_falls_over_with_the_exact_balance"],
+      "the second tendon on -d2 instead of d3 (the two cancel; the arm tips over only by round-off)"),
+    M("shooting-guess-ignored", "forms/actuators.py",
+      [("G0 = np.zeros(3) if G0 is None else np.array(G0, float)", "G0 = np.zeros(3)")],
+      [f"{TENDON_DYN}::test_long_time_limit_is_the_fallen_static_equilibrium"],
+      "shooting_statics ignores its starting guess G0: Newton finds the upright equilibrium, not the fallen one"),
+    M("tendon-arm-dynamic-guess-moment-sign", "demos/tendon_arm_dynamic.py",
+      [("moments = np.cross(near, f)", "moments = np.cross(f, near)")],
+      [f"{TENDON_DYN}::test_long_time_limit_is_the_fallen_static_equilibrium"],
+      "the base moment of the guess with the wrong sign (Newton starts on the other side)"),
     # -- bodies assembled as a batch (rodfem/fem/batch.py) ------------------------------------------
     M("batch-first-body-constants", "rodfem/fem/fastassembly.py",
       [("    kernel(be, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);",

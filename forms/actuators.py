@@ -460,7 +460,7 @@ def uniform_equilibrium(K_se, K_bt, tendons=(), chambers=(), rate=0.0):
 
 
 def shooting_statics(K_se, K_bt, length, tendons=(), chambers=(), force=(0.0, 0.0, 0.0), R0=np.eye(3),
-                     steps=400):
+                     steps=400, G0=None):
     """Static shape of an arm clamped at s = 0 (R0 = [d1 d2 d3] there) under tendons (tau, Routing),
     chambers (p, A, Routing) and a uniform force per length `force` (gravity), by shooting (RK4 in s).
 
@@ -472,7 +472,8 @@ def shooting_statics(K_se, K_bt, length, tendons=(), chambers=(), force=(0.0, 0.
 
     (t_j the tendon's unit tangent), solved pointwise for the strains (`pointwise_strains`), and
     r' = R (e_1 + Gamma), R' = R hat(K), G' = -r x force.  The unknown G(0) makes G(L) = 0.
-    Returns (s, r(s), R(s)).
+    Newton on G(0) starts from `G0` (default 0): where there are several equilibria (a column above its
+    buckling load), the guess selects one.  Returns (s, r(s), R(s)).
     """
     f = np.asarray(force, float)
     h = length / steps
@@ -511,7 +512,7 @@ def shooting_statics(K_se, K_bt, length, tendons=(), chambers=(), force=(0.0, 0.
                 out.append(((k + 1) * h, r, R))
         return G, out
 
-    G0 = np.zeros(3)
+    G0 = np.zeros(3) if G0 is None else np.array(G0, float)
     scale = max(np.linalg.norm(f) * length ** 2, 1e-300)
     for _ in range(30):
         GL, _ = integrate(G0)
