@@ -104,6 +104,8 @@ Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the
 temperature, power Q) and convection to an environment at theta_env (input theta_env,
 power h_c int (theta_env - theta) ds); their work is in `supplied`.
 """
+import numbers
+
 import numpy as np
 import ufl
 
@@ -111,6 +113,35 @@ from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
 from rodfem.forms.string import String, relaxed
+
+
+def thermal_slope(rule, xi0, xi1, c, theta0):
+    """T'_bar of T(xi) = c theta0 (exp(xi) - 1) between xi0 and xi1 (UFL): the discrete gradient's
+    c theta0 exp(xi_m) sinh(d xi/2)/(d xi/2) (its Taylor series where |d xi/2| <= 1e-3, d xi = 0
+    included), the midpoint rule's c theta0 exp(xi_m)."""
+    half = 0.5 * (xi1 - xi0)
+    factor = 1.0
+    if rule == "discrete-gradient":
+        factor = ufl.conditional(ufl.gt(abs(half), 1e-3), ufl.sinh(half) / ufl.conditional(
+            ufl.gt(abs(half), 1e-3), half, 1.0), 1 + half ** 2 / 6 + half ** 4 / 120)
+    return c * theta0 * ufl.exp(0.5 * (xi0 + xi1)) * factor
+
+
+def thermal_parameters(owner, alpha, c, kappa, theta0):
+    """(alpha, c, kappa, theta0) as floats, checked: alpha finite, c > 0, kappa >= 0, theta0 > 0
+    (ValueError naming the parameter)."""
+    for name, value, low in (("alpha", alpha, None), ("c", c, 0), ("kappa", kappa, -1), ("theta0", theta0, 0)):
+        ok = isinstance(value, numbers.Real) and np.isfinite(value) and (low is None or value > low)
+        if not ok:
+            allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
+            raise ValueError(f"{owner}: {name} must be {allowed} (got {value!r})")
+    return float(alpha), float(c), float(kappa), float(theta0)
+
+
+def conduction(kappa, theta, deta):
+    """kappa d_s theta d_s(deta/theta): Fourier conduction in the entropy row (UFL); zero for deta = theta,
+    kappa (theta'/theta)^2 for deta = 1."""
+    return kappa * theta.dx(0) * (deta.dx(0) / theta - deta * theta.dx(0) / theta ** 2)
 
 
 class ThermoelasticString(String):
@@ -134,12 +165,7 @@ class ThermoelasticString(String):
         EA = material.params.get("EA")
         if EA is None:
             raise ValueError(f"material {material.name} has no parameter EA (the coupling is beta = EA alpha)")
-        for name, value, low in (("alpha", alpha, None), ("c", c, 0), ("kappa", kappa, -1), ("theta0", theta0, 0)):
-            ok = np.isfinite(value) and (low is None or value > low)
-            if not ok:
-                allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
-                raise ValueError(f"ThermoelasticString: {name} must be {allowed} (got {value!r})")
-        self.alpha, self.c, self.kappa, self.theta0 = float(alpha), float(c), float(kappa), float(theta0)
+        self.alpha, self.c, self.kappa, self.theta0 = thermal_parameters("ThermoelasticString", alpha, c, kappa, theta0)
         self.beta = self.alpha * float(EA)
         self.thermal = ParameterSet(beta=self.beta, c=self.c, kappa=self.kappa, theta0=self.theta0)
 
@@ -205,8 +231,7 @@ class ThermoelasticString(String):
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
              + (theta - zeta) * dth
-             + step.rate("eta") * deta + k["kappa"] * theta.dx(0) * (deta.dx(0) / theta
-                                                                   - deta * theta.dx(0) / theta ** 2)
+             + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)
              - heat * deta / theta) * dx
         for i, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):   # as in forms/string.py
             row = step.rate(f"C_{i}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
@@ -225,12 +250,7 @@ class ThermoelasticString(String):
         k = self._t(domain)
         (zW,) = step.effort(lambda C: self.W(C, domain), ["C"])
         xi = [(x["eta"] - k["beta"] * self.coupling(x["C"])) / k["c"] for x in (step.x0, step.x1)]
-        half = 0.5 * (xi[1] - xi[0])
-        factor = 1.0
-        if step.rule == "discrete-gradient":   # sinh(y)/y, its Taylor series where |y| <= 1e-3 (y = 0 included)
-            factor = ufl.conditional(ufl.gt(abs(half), 1e-3), ufl.sinh(half) / ufl.conditional(
-                ufl.gt(abs(half), 1e-3), half, 1.0), 1 + half ** 2 / 6 + half ** 4 / 120)
-        dT = k["c"] * k["theta0"] * ufl.exp(0.5 * (xi[0] + xi[1])) * factor   # T'_bar
+        dT = thermal_slope(step.rule, xi[0], xi[1], k["c"], k["theta0"])   # T'_bar
         zC = zW + 0.5 * k["beta"] * k["theta0"] - 0.5 * k["beta"] / k["c"] * dT
         return zC, dT / k["c"]
 
