@@ -83,7 +83,7 @@ class ThermoelasticBeam(PlanarBeam):
         if EA is None:
             raise ValueError(f"ThermoelasticBeam: energy {energy!r} has no parameter EA (the coupling is beta = EA alpha)")
         self.alpha, self.c, self.kappa_th, self.theta0 = thermal_parameters("ThermoelasticBeam", alpha, c, kappa_th,
-                                                                            theta0)
+                                                                            theta0, "kappa_th")
         super().__init__(rhoA, rhoI, energy, degree, gauss_points, branches, damping)
         k = self.degree
         self.fields = self.fields + [Field("eta", "P", k), Field("theta", "P", k)]

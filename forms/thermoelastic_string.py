@@ -127,10 +127,10 @@ def thermal_slope(rule, xi0, xi1, c, theta0):
     return c * theta0 * ufl.exp(0.5 * (xi0 + xi1)) * factor
 
 
-def thermal_parameters(owner, alpha, c, kappa, theta0):
+def thermal_parameters(owner, alpha, c, kappa, theta0, conductivity="kappa"):
     """(alpha, c, kappa, theta0) as floats, checked: alpha finite, c > 0, kappa >= 0, theta0 > 0
-    (ValueError naming the parameter)."""
-    for name, value, low in (("alpha", alpha, None), ("c", c, 0), ("kappa", kappa, -1), ("theta0", theta0, 0)):
+    (ValueError naming the parameter; the conductivity's name is `conductivity`)."""
+    for name, value, low in (("alpha", alpha, None), ("c", c, 0), (conductivity, kappa, -1), ("theta0", theta0, 0)):
         ok = isinstance(value, numbers.Real) and np.isfinite(value) and (low is None or value > low)
         if not ok:
             allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
