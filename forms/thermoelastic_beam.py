@@ -52,6 +52,8 @@ gives int N.dGamma = int z_Gamma.dGamma since dGamma is in DG_{k-1}), the theta-
     as in forms/planar_beam.py, not turned into heat),
 
 H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + e ds the total energy, exact for the discrete gradient.
+The heat ports' work is in `supplied`, and cumulative in the column `heat_supplied` (the heat meter q
+of forms/heat_ports.py, one more DG0 state).
 Entropy: the eta-row with deta = 1: int eta_{n+1} - int eta_n = h int kappa_th (theta'/theta)^2 + ports >= 0.
 """
 import ufl
@@ -59,6 +61,7 @@ import ufl
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
+from rodfem.forms.heat_ports import HEAT, HEAT_LABEL, heat_row, heat_supplied
 from rodfem.forms.planar_beam import E1, PlanarBeam
 from rodfem.forms.thermoelastic_string import conduction, thermal_parameters, thermal_slope
 
@@ -73,8 +76,8 @@ class ThermoelasticBeam(PlanarBeam):
     labels = {**PlanarBeam.labels,
               "eta": ("entropy density per reference length (the state's)", ()),
               "theta": ("the step's temperature (L2 projection of de/d eta)", ()),
-              "temperature": ("temperature theta(Gamma, eta) = de/d eta", ())}
-    units = {**PlanarBeam.units, "eta": "J/(K m)", "theta": "K", "temperature": "K"}
+              "temperature": ("temperature theta(Gamma, eta) = de/d eta", ()), **HEAT_LABEL}
+    units = {**PlanarBeam.units, "eta": "J/(K m)", "theta": "K", "temperature": "K", "heat": "J/m"}
     static_fields = None   # no statics: the thermal rows have no total form
 
     def __init__(self, rhoA, rhoI, energy, alpha, c, kappa_th, theta0, degree=1, gauss_points=None,
@@ -86,7 +89,7 @@ class ThermoelasticBeam(PlanarBeam):
                                                                             theta0, "kappa_th")
         super().__init__(rhoA, rhoI, energy, degree, gauss_points, branches, damping)
         k = self.degree
-        self.fields = self.fields + [Field("eta", "P", k), Field("theta", "P", k)]
+        self.fields = self.fields + [Field("eta", "P", k), Field("theta", "P", k), HEAT]
         self.beta = self.alpha * float(EA)
         self.thermal = ParameterSet(beta=self.beta, c=self.c, kappa=self.kappa_th, theta0=self.theta0)
 
@@ -135,7 +138,7 @@ class ThermoelasticBeam(PlanarBeam):
         k = self.thermal.on(dom)
         deta, dth, theta = test["eta"], test["theta"], step.x1["theta"]
         thermal = ((theta - self.entropy_effort(step, dom)) * dth
-                   + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)) * dx
+                   + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)) * dx + heat_row(step, test, dx)
         return super().residual(step, test, dx, ds) + thermal
 
     def compatible_strains(self, x):
@@ -159,14 +162,15 @@ class ThermoelasticBeam(PlanarBeam):
 
     def columns(self, x, dx, ds, length):
         """History columns of x_{n+1}: entropy int eta, mean_temperature (1/L) int theta(Gamma, eta),
-        entropy_production int kappa_th (theta'/theta)^2 (theta: the step's field), temperature_left,
+        entropy_production int kappa_th (theta'/theta)^2 (theta: the step's field), heat_supplied int q
+        (forms/heat_ports.py), temperature_left,
         temperature_right, arc_length int |d_s r|, mean_axial_force (1/L) int N_1."""
         dom = dx.ufl_domain()
         k = self.thermal.on(dom)
         th = x["theta"]
         theta = self.temperature(x["Gamma"], x["eta"], dom)
         N = self.outputs(x)["N"]
-        return {"entropy": x["eta"] * dx,
+        return {"entropy": x["eta"] * dx, "heat_supplied": heat_supplied(x, dx),
                 "mean_temperature": theta / length * dx,
                 "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx,
                 "temperature_left": theta * ds(ENDS["left"]), "temperature_right": theta * ds(ENDS["right"]),

@@ -102,7 +102,8 @@ entropy row, the same way: the total energy stays exact.
 
 Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the end's
 temperature, power Q) and convection to an environment at theta_env (input theta_env,
-power h_c int (theta_env - theta) ds); their work is in `supplied`.
+power h_c int (theta_env - theta) ds); their work is in `supplied`, and cumulative in the column
+`heat_supplied` (the heat meter q of forms/heat_ports.py, one more DG0 state).
 """
 import numbers
 
@@ -112,6 +113,7 @@ import ufl
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
+from rodfem.forms.heat_ports import HEAT, HEAT_LABEL, heat_row, heat_supplied
 from rodfem.forms.string import String, relaxed
 
 
@@ -149,12 +151,13 @@ class ThermoelasticString(String):
     isothermal energy at theta0), rhoA, the expansion coefficient alpha (1/K), the heat capacity
     c per reference length (J/(K m), > 0), kappa = conductivity x area (W m/K, >= 0), the
     reference temperature theta0 (K, > 0); end_masses as for String."""
-    fields = String.fields + [Field("eta", "P", 1), Field("theta", "P", 1)]
+    fields = String.fields + [Field("eta", "P", 1), Field("theta", "P", 1), HEAT]
     quadrature_degree = 4   # e(C, eta) has exp(eta): a rule of degree 4 (the same in H and the rows)
     labels = {**String.labels,
               "eta": ("entropy density per reference length (the state's)", ()),
               "theta": ("the step's temperature (L2 projection of de/d eta)", ()),
-              "temperature": ("temperature theta(C, eta) = de/d eta", ())}
+              "temperature": ("temperature theta(C, eta) = de/d eta", ()), **HEAT_LABEL}
+    units = {**String.units, "eta": "J/(K m)", "theta": "K", "temperature": "K", "heat": "J/m"}
     static_fields = None   # no statics: the thermal rows have no total form here
 
     def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=(), damping=None):
@@ -232,7 +235,7 @@ class ThermoelasticString(String):
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
              + (theta - zeta) * dth
              + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)
-             - heat * deta / theta) * dx
+             - heat * deta / theta) * dx + heat_row(step, test, dx)
         for i, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):   # as in forms/string.py
             row = step.rate(f"C_{i}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
             F += b.row_scale(step, dom) * row * test[f"C_{i}"] * dx
@@ -271,13 +274,14 @@ class ThermoelasticString(String):
     def columns(self, x, dx, ds, length):
         """History columns of x_{n+1}: entropy int eta, mean_temperature (1/L) int theta(C, eta),
         entropy_production int kappa (d_s theta / theta)^2 of the step (theta: the step's field),
+        heat_supplied int q (forms/heat_ports.py),
         temperature_left, temperature_right theta(C, eta) at the ends, arc_length int sqrt(C),
         mean_tension (1/L) int N."""
         dom = dx.ufl_domain()
         k = self._t(dom)
         th = x["theta"]
         theta = self.temperature(x["C"], x["eta"], dom)
-        return {"entropy": x["eta"] * dx,
+        return {"entropy": x["eta"] * dx, "heat_supplied": heat_supplied(x, dx),
                 "mean_temperature": theta / length * dx,
                 "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx,
                 "temperature_left": theta * ds(ENDS["left"]), "temperature_right": theta * ds(ENDS["right"]),
