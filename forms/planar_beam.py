@@ -294,9 +294,14 @@ class PlanarBeam:
     def dissipation(self, step, dx, ds):
         """h d_n = h int sum_j N_j.R_j N_j + R_j M_j^2 + e.D e + alpha (rhoA v.v + rhoI omega^2) ds
         (None without branches and damping)."""
+        d = self.dissipation_density(step, dx.ufl_domain())
+        return None if d is None else step.h * d * dx
+
+    def dissipation_density(self, step, domain):
+        """d_n = sum_j N_j.R_j N_j + R_j M_j^2 + e.D e + alpha (rhoA v.v + rhoI omega^2) (UFL; None without
+        branches and damping)."""
         if not self.branches and self.damping is None:
             return None
-        domain = dx.ufl_domain()
         d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
                 for Nj, Mj, R in self._branch_efforts(step, domain))
         if self.damping is not None:
@@ -305,7 +310,7 @@ class PlanarBeam:
             if alpha is not None:
                 c, v, w = self.densities.on(domain), step.mid("v"), step.mid("omega")
                 d = d + alpha * (c["rhoA"] * ufl.inner(v, v) + c["rhoI"] * w ** 2)
-        return step.h * d * dx
+        return d
 
     @property
     def massless(self):

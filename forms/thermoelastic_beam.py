@@ -48,10 +48,15 @@ Energy: test the beam's rows as in forms/planar_beam.py (the strain rows with (N
 gives int N.dGamma = int z_Gamma.dGamma since dGamma is in DG_{k-1}), the theta-row with
 (eta_{n+1} - eta_n)/h and the eta-row with theta (the conduction term vanishes):
 
-    H_{n+1} - H_n = h y.u (- h d_n of Maxwell branches and viscous damping, booked as `dissipated`
-    as in forms/planar_beam.py, not turned into heat),
+    H_{n+1} - H_n = h y.u,
 
 H = int 1/2 rhoA v.v + 1/2 rhoI omega^2 + e ds the total energy, exact for the discrete gradient.
+
+Maxwell branches and Kelvin-Voigt / Rayleigh damping (forms/viscoelastic.py, forms/damping.py): their work
+d_n >= 0 of forms/planar_beam.py (`dissipation_density`: sum_j N_j.R_j N_j + R_j M_j^2 + e.D e
++ alpha (rhoA v.v + rhoI omega^2)) is a heat source in the entropy row, - d_n deta/theta, as in
+forms/thermoelastic_string.py: the mechanical loss is the heat's gain (deta = theta), the total energy
+stays exact, nothing is booked as `dissipated`, and the entropy grows by h int d_n/theta more.
 The heat ports' work is in `supplied`, and cumulative in the column `heat_supplied` (the heat meter q
 of forms/heat_ports.py, one more DG0 state).
 Entropy: the eta-row with deta = 1: int eta_{n+1} - int eta_n = h int kappa_th (theta'/theta)^2 + ports >= 0.
@@ -139,7 +144,14 @@ class ThermoelasticBeam(PlanarBeam):
         deta, dth, theta = test["eta"], test["theta"], step.x1["theta"]
         thermal = ((theta - self.entropy_effort(step, dom)) * dth
                    + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)) * dx + heat_row(step, test, dx)
+        heat = self.dissipation_density(step, dom)   # the dashpots' work becomes heat
+        if heat is not None:
+            thermal -= heat * deta / theta * dx
         return super().residual(step, test, dx, ds) + thermal
+
+    def dissipation(self, step, dx, ds):
+        """None: the total energy is conserved (the dashpots and the damping turn work into heat)."""
+        return None
 
     def compatible_strains(self, x):
         """Gamma, kappa of the configuration; theta = theta0 unless given; eta = eta(Gamma, theta)."""

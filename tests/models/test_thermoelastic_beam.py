@@ -136,3 +136,33 @@ def test_mpi_two_ranks_match_serial(tmp_path):
     args = ["run", "heated-beam", "--set", "start=reference", "--set", "Q=20", "--set", "t_end=0.05", "--quiet"]
     a, b, _ = serial_and_parallel(tmp_path / "beam", args, timeout=300)
     assert_same_history(a, b, 1e-9, skip=("newton_its", "balance_error"))
+
+
+@pytest.mark.parametrize("kind", ["maxwell", "kelvin-voigt", "rayleigh"])
+def test_dashpot_work_becomes_heat(kind):
+    """A Maxwell branch, Kelvin-Voigt or Rayleigh damping on the thermoelastic beam with alpha = 0: the motion
+    is the damped PlanarBeam's to round-off, the heat gained c L (mean theta - theta0) equals that beam's
+    `dissipated` at every time, nothing is booked as dissipated, H is exact and the entropy grows.  Newton to
+    |F| <= 1e-13 (both runs): the entropy row's residual enters the energy times theta = 300 K, and at the
+    default |F| <= 1e-10 the viscous heat left 1.4e-10 J per step (measured; 2e-14 J at 1e-13/1e-14)."""
+    from rodfem.forms.planar_beam import kelvin_voigt, maxwell, rayleigh
+    extra = {"maxwell": {"branches": [maxwell(0.05, 50.0, 50.0, 0.5)]},
+             "kelvin-voigt": {"damping": kelvin_voigt(0.01, 100.0, 100.0, 1.0)},
+             "rayleigh": {"damping": rayleigh(0.5, 0.005, 100.0, 100.0, 1.0)}}[kind]
+    W = log_axial(EA=100.0, GA=100.0, EI=1.0)
+    init = {"r": lambda x: np.vstack([x[0], 0 * x[0]]),
+            "v": lambda x: np.vstack([0.3 * np.sin(np.pi * x[0]), 2 * np.sin(np.pi * x[0])])}
+    sup = [Support("left", "clamped"), Support("right", "pinned")]
+    tight = {"snes_atol": 1e-13}
+    plain = run(Problem(PlanarBeam(1.0, 0.01, W, **extra), 1.0, 12, initial=init, supports=sup,
+                        integrator="discrete-gradient", newton_options=tight), 0.01, 0.3)
+    model = ThermoelasticBeam(1.0, 0.01, W, alpha=0.0, c=2.0, kappa_th=0.5, theta0=THETA0, **extra)
+    thermo = run(Problem(model, 1.0, 12, initial=init, supports=sup, integrator="discrete-gradient",
+                         newton_options=tight), 0.01, 0.3)
+    assert "dissipated" not in thermo.rows[0]
+    for col in ("mean_x", "mean_y"):
+        assert np.max(np.abs(thermo.column(col) - plain.column(col))) <= 1e-12
+    heat, lost = 2.0 * (thermo.column("mean_temperature") - THETA0), plain.column("dissipated")
+    assert lost[-1] > 1e-3 and np.max(np.abs(heat - lost)) <= 1e-13 * SCALE
+    assert np.max(np.abs(thermo.column("balance_error"))) <= 1e-13 * SCALE
+    assert np.all(np.diff(thermo.column("entropy")) > 0)
