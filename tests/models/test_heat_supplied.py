@@ -17,10 +17,13 @@ THETA0 = 300.0
 
 
 @pytest.mark.parametrize("scene, over", [(conduction, {"start": "flux", "n_elements": 16, "t_end": 0.02, "Q": 50.0}),
-                                         (heated_beam, {"start": "reference", "Q": 50.0, "t_end": 0.05})])
+                                         (heated_beam, {"start": "reference", "Q": 50.0, "t_end": 0.05}),
+                                         (heated_beam, {"start": "reference", "Q": 50.0, "t_end": 0.05,
+                                                        "adaptive": "true"})])
 def test_constant_flux_heat_supplied_is_q_t(scene, over):
-    """A constant heat flux Q = 50 W into s = 0 (string: heat-conduction, beam: heated-beam released):
-    heat_supplied = Q t to round-off, and it is all of `supplied` (no mechanical port), starting at 0."""
+    """A constant heat flux Q = 50 W into s = 0 (string: heat-conduction, beam: heated-beam released, also with
+    adaptive steps): heat_supplied = Q t to round-off, and it is all of `supplied` (no mechanical port),
+    starting at 0."""
     res, _ = run_scene(scene, over)
     t, q = res.column("t"), res.column("heat_supplied")
     assert q[0] == 0.0
