@@ -1,7 +1,7 @@
-# rodfem in Docker: Debian's FEniCSx, with the forms of every demo compiled when the image is built
-# (a run starts warm).  From the checkout:
+# rodfem in Docker: Debian's FEniCSx (DOLFINx 0.9.0 on Debian 13, 0.5.2 on 12), with the forms of
+# every demo compiled when the image is built (a run starts warm).  From the checkout:
 #
-#   docker build -t rodfem .                                   # Debian 12; --build-arg DEBIAN=trixie: 13
+#   docker build -t rodfem .                                   # Debian 13; --build-arg DEBIAN=bookworm: 12
 #   mkdir -p results
 #   docker run --rm --user "$(id -u):$(id -g)" -v "$PWD/results:/rodfem/results" rodfem
 #       -> results/flying-spaghetti-2d/, owned by you
@@ -12,7 +12,7 @@
 # Without --user the container runs as root: files in results/ are root's, and mpirun needs
 # --allow-run-as-root.  The JIT cache (/rodfem/.cache) is writable by any user, so forms a run
 # changes (another integrator, an edited material) compile there.
-ARG DEBIAN=bookworm
+ARG DEBIAN=trixie
 FROM debian:${DEBIAN}
 ENV DEBIAN_FRONTEND=noninteractive OMP_NUM_THREADS=1 \
     XDG_CACHE_HOME=/rodfem/.cache MPLCONFIGDIR=/tmp/matplotlib HOME=/tmp

@@ -54,11 +54,13 @@ LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
+BATCH = "tests/core/test_batch.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
+GALERKIN = "tests/analysis/test_galerkin.py"
 DAMPING = "tests/models/test_damping.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
@@ -688,6 +690,19 @@ MUTATIONS = [
       [("                    if dt / (2 * k) < h_min * (1 - 1e-12):\n", "                    if k > 2 ** 40:\n")],
       [STEPPING + "::test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line"],
       "a failing step is split without the stated minimum dt_min"),
+    # -- DOLFINx versions (rodfem/fem/compat.py, issue 28) ----------------------------------------------
+    M("compat-adjacency-transposed", "rodfem/fem/compat.py",
+      [("return np.asarray(adj.array).reshape(-1, n) if n", "return np.asarray(adj.array).reshape(n, -1).T if n")],
+      ["tests/fem/test_assembly.py::test_fast_assembly_is_dolfinx_assembly",
+       "tests/fem/test_assembly.py::test_linear_time_collapse_is_dolfinx_collapse"],
+      "0.5's cell-to-dof and cell-to-node lists read column by column: each cell gets other cells' dofs"),
+    M("compat-expression-cells-ignored", "rodfem/fem/compat.py",
+      [("    return expr.eval(cells)\n", "    return expr.eval(np.zeros_like(cells))\n"),
+       ("    first = next(iter(inspect.signature(expr.eval).parameters))\n",
+        "    import numpy as np\n    first = next(iter(inspect.signature(expr.eval).parameters))\n")],
+      ["tests/io/test_output.py::test_planar_beam_polyline_surface_strains_and_frames",
+       "tests/io/test_output.py::test_helix_strains_moments_surface_and_no_velocities"],
+      "the output expressions evaluated on the first cell for every cell (0.5 branch of eval_expression)"),
     # -- thermoelastic string (issue 30) --
     M("conduction-without-the-product-rule", "forms/thermoelastic_string.py",
       [("- deta * theta.dx(0) / theta ** 2)\n", "- 0.0 * deta * theta.dx(0) / theta ** 2)\n")],
@@ -793,6 +808,24 @@ MUTATIONS = [
       [("        b = Vh[k % Vh.shape[0]].conj()\n", "        b = Vh[0].conj()\n")],
       [REDUCE + "::test_transfer_functions_agree_at_the_interpolation_points"],
       "a repeated frequency gets the same direction twice (the hanging cable's second pendulum plane is lost)"),
+    M("galerkin-effort-basis-not-the-strain-basis", "rodfem/analysis/galerkin.py",
+      [("    V[lay.n, 2 * rq + re:] = Psi\n", "    V[lay.n, 2 * rq + re:] = Psi[::-1]\n")],
+      [GALERKIN + "::test_reduced_energy_balance_is_exact"],
+      "the effort fields reduced with another basis than the strains: the projected effort is no longer a "
+      "test vector of the strain rows, the reduced energy balance breaks"),
+    M("galerkin-no-strain-images", "rodfem/analysis/galerkin.py",
+      [("    if problem is not None:   # the strain images first", "    if False:   # the strain images first")],
+      [GALERKIN + "::test_no_configuration_mode_without_stiffness"],
+      "the energy basis without the configuration modes' strain images: stiffness-free modes"),
+    M("galerkin-one-newton-iteration", "rodfem/analysis/galerkin.py",
+      [("            if norm <= ATOL or norm <= RTOL * r0 or small:", "            if it >= 1 or norm <= ATOL or small:")],
+      [GALERKIN + "::test_reduced_energy_balance_is_exact"],
+      "the reduced Newton stops after one iteration: the Galerkin residual is not zero, nor the balance exact"),
+    M("galerkin-accept-keeps-the-old-state", "rodfem/analysis/galerkin.py",
+      [("        self.xi0 = self.xi1.copy()\n        self._push_x0()\n        return previous",
+        "        self.xi0 = self.xi1.copy()\n        return previous")],
+      [GALERKIN + "::test_full_rank_reproduces_the_full_model"],
+      "accept() does not put x_{n+1} into the problem's x_n: every step starts from the initial state"),
     # -- Kelvin-Voigt and Rayleigh damping (issue 25) --
     M("kv-pointwise-strain-rate", "forms/planar_beam.py",
       [('        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")\n',
@@ -873,6 +906,29 @@ MUTATIONS = [
         'for t, _, f, _ in read_pvd(os.path.join(out, "surface.pvd"))[:1]:')],
       ["tests/io/test_output_physics.py::test_view_script_has_the_ranges_of_all_frames"],
       "view.py's colour ranges those of the first frame (a run from rest: [0, 0])"),
+    # -- bodies assembled as a batch (rodfem/fem/batch.py) ------------------------------------------
+    M("batch-first-body-constants", "rodfem/fem/fastassembly.py",
+      [("    kernel(be, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);",
+        "    kernel(be, coeffs + (size_t)e * cstride, consts, coords, facets ? facets + e : NULL, &perm);")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "every body of a batch assembled with the first body's constants (its load, its stiffness)"),
+    M("batch-stale-coefficients", "rodfem/fem/batch.py",
+      [("            self._other_views.get(self.S)",
+        "            pass")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "the batch keeps the coefficients other than the iterate (x_n) as they were at build"),
+    M("batch-stale-constants", "rodfem/fem/batch.py",
+      [("            self._const_views.get(self.consts)", "            pass")],
+      [BATCH + "::test_bodies_of_different_sizes_share_a_batch"],
+      "the batch keeps the constants (h, the loads' values) as they were at build"),
+    M("batch-no-lifting", "rodfem/fem/batch.py",
+      [("            if np.any(gap != 0.0):", "            if False:")],
+      [BATCH + "::test_residual_at_a_state_off_the_supports"],
+      "the batch's residual leaves out the lifting of a support the iterate does not meet"),
+    M("batch-no-dirichlet-diagonal", "rodfem/fem/batch.py",
+      [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
+      [BATCH + "::test_chain_batched_equals_body_by_body"],
+      "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
 ]
 
 

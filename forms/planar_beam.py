@@ -217,6 +217,7 @@ class PlanarBeam:
         self.projected = k >= 2 or self.projects
         if self.projected:  # the efforts, projected on DG_{k-1} (module docstring); algebraic: only x_{n+1} is used
             self.fields += [Field("N", "DG", k - 1, (2,)), Field("M", "DG", k - 1)]
+            self.efforts = {"Gamma": "N", "kappa": "M"}   # energy variable -> its effort field (same element)
         # Maxwell branches with stiffness: their elastic strains are internal variables
         self.branches = active(branches)
         for j in range(1, len(self.branches) + 1):

@@ -17,9 +17,14 @@ RODFEM = os.path.join(BIN, "rodfem")
 
 
 def environment(**extra):
-    """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed."""
+    """The children's environment: one thread per rank, mpirun allowed as root and oversubscribed, and
+    quiet (Open MPI 4's `-q`: no help text after a rank's non-zero exit; Open MPI 5, Debian 13, has
+    neither the option nor the setting and prints its help text), and without the TCP transport (the
+    ranks are on one machine; Open MPI 5 printed "Unable to find reachable pairing between local and
+    remote interfaces" on this machine's interfaces, a second line after the one-line errors)."""
     return dict(os.environ, OMP_NUM_THREADS="1", OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-                OMPI_MCA_rmaps_base_oversubscribe="1", **extra)
+                OMPI_MCA_rmaps_base_oversubscribe="1", OMPI_MCA_orte_execute_quiet="1",
+                OMPI_MCA_btl="^tcp", **extra)
 
 
 def signals_as_a_terminal():
@@ -39,7 +44,7 @@ def command(*args, np=None, timeout=600):
     """The argument list of `rodfem ARGS`, under `timeout T mpirun -n np` if np."""
     cmd = [RODFEM, *map(str, args)]
     if np:
-        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n",
+        cmd = ["timeout", str(timeout), shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
                str(np), *cmd]
     return cmd
 
@@ -48,6 +53,20 @@ def rodfem(*args, np=None, env=None, timeout=600):
     """Run `rodfem ARGS` (under mpirun -n np if np) from the repository; the CompletedProcess."""
     return subprocess.run(command(*args, np=np, timeout=timeout), capture_output=True, text=True,
                           env=environment(**(env or {})), cwd=REPO, timeout=timeout + 30)
+
+
+def rodfem_lines(stderr):
+    """The lines of stderr that are rodfem's: without the launcher's framed help text (a block between
+    two lines of dashes), which Open MPI 5 (Debian 13) prints after a rank's non-zero exit and has no
+    setting to silence (Open MPI 4's `-q`), and its launcher's "[host:pid] PMIX ERROR: PMIX_ERR_UNREACH"
+    when both ranks exit at once."""
+    lines, inside = [], False
+    for line in stderr.strip().splitlines():
+        if line.startswith("-" * 20) and not line.strip("-"):
+            inside = not inside
+        elif not inside:
+            lines.append(line)
+    return [ln for ln in lines if ln.strip() and not (ln.startswith("[") and "] PMIX ERROR: " in ln)]
 
 
 def ok(p):

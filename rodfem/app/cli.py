@@ -173,6 +173,10 @@ def cmd_reduce(args):
     """rodfem reduce SCENE --order r: structure-preserving reduced PH models (issue 29)."""
     from rodfem.app.reduction import run_reduce
     out = args.out or os.path.join("results", args.scene + "-reduced")
+    if args.nonlinear:
+        return cmd_reduce_nonlinear(args, out)
+    if args.test:
+        raise ParameterError("--test goes with --nonlinear (the test input of the nonlinear reduced model)")
     info = run_reduce(args.scene, parse_sets(args.set), out=out, orders=args.order, about=args.about, t=args.time,
                       alpha=args.alpha)
     say(f"{info['scene']}: reduced PH models of the {info['n_states']}-state linear model about the {args.about} state "
@@ -185,6 +189,22 @@ def cmd_reduce(args):
         say(f"{r:>5s} {o['error']['max_relative']:19.2e} {o['error_in_band']['max_relative']:10.2e} "
             f"{o['interpolation_error']:10.1e} {str(o['checks']['passive']):>8s}  {pairs}")
     say(f"results in {out}/: r<order>/{{E,J,R,Q,B,C}}.npz, V.npy, reduced.mat; reduce.json, bode.png, summary.json")
+
+
+def cmd_reduce_nonlinear(args, out):
+    """rodfem reduce SCENE --nonlinear: the POD-Galerkin reduced model of the nonlinear scene (issue 29)."""
+    from rodfem.app.nonlinear_reduction import run_nonlinear_reduce
+    info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test), orders=args.order, out=out)
+    runs = info["runs"]
+    say(f"{info['scene']}: nonlinear reduced models ({runs['train']['dofs']} dofs; full model "
+        + ", ".join(f"{k} {v['full_ms_per_step']:.3g} ms/step" for k, v in runs.items()) + ")")
+    say(f"{'r':>3s} {'unknowns':>8s} {'input':>6s} {'config. error':>13s} {'balance/H':>10s} {'ms/step':>8s} {'speed-up':>8s}")
+    for r, o in info["orders"].items():
+        for name in runs:
+            e = o[name]
+            say(f"{r:>3s} {o['reduced_unknowns']:8d} {name:>6s} {e['errors']['configuration']:13.2e} "
+                f"{e['errors']['balance_relative']:10.1e} {e['ms_per_step']:8.3g} {e['speed_up']:8.2f}")
+    say(f"results in {out}/nonlinear_reduce.json")
 
 
 def parser():
@@ -255,6 +275,11 @@ def add_reduce_parser(sub):
     rp.add_argument("--time", type=float, default=0.0, metavar="T", help="the inputs at time T (default 0)")
     rp.add_argument("--alpha", type=float, default=0.05, metavar="A",
                     help="real part of the interpolation points, a fraction of the first natural frequency (default 0.05)")
+    rp.add_argument("--nonlinear", action="store_true",
+                    help="the nonlinear POD-Galerkin reduced model instead (--order: POD modes per block), trained on "
+                         "the scene's run (docs/guide/nonlinear-reduction.md)")
+    rp.add_argument("--test", action="append", metavar="NAME=VALUE",
+                    help="with --nonlinear: a parameter of the test run (another input; repeatable)")
     rp.set_defaults(func=cmd_reduce)
 
 

@@ -61,6 +61,8 @@ class Body:
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
         self.contacts = list(contacts)
         self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
+        tdim = self.mesh.topology.dim   # cell-to-cell: locate_dofs_topological on cells needs it (0.9)
+        self.mesh.topology.create_connectivity(tdim, tdim)
         self.comm = self.mesh.comm
         self.space = S = (RigidSpace if self.rigid else StateSpace)(self.mesh, model.fields)
         self.x0, self.x1, self.state0 = (fem.Function(S.V) for _ in range(3))

@@ -30,6 +30,12 @@ Optional, for a model with dissipation (E x' = (J - R) z + B u, R >= 0):
                  dissipates nothing: then nothing is built or assembled for it
                  (forms/viscoelastic.py: generalized Maxwell branches)
 
+Optional, for the nonlinear reduced model (rodfem/analysis/galerkin.py):
+
+``efforts``      dict energy-variable field -> its effort field (an algebraic field of the same
+                 element: the projection of the step's effort, read by the rows in its place),
+                 e.g. {"Gamma": "N", "kappa": "M"}
+
 Optional, for what a run writes (rodfem/io/snapshot.py, rodfem/io/frames.py):
 
 ``outputs(x)``   dict name -> UFL expression of the state x: the strains and stress resultants

@@ -57,12 +57,13 @@ class Load:
     name: str = ""
     pairing: Optional[Callable] = None
     constant: fem.Constant = field(default=None, init=False, repr=False)
+    steady: Optional[Callable] = field(default=None, init=False, repr=False)   # a value given as an array
 
     def __post_init__(self):
         if self.where not in ("left", "right", "domain"):
             raise InputError(f"Load.where must be 'left', 'right' or 'domain' (got {self.where!r})")
         if not callable(self.value):
-            self.value = constant_in_time(self.value)
+            self.value = self.steady = constant_in_time(self.value)
         self.name = self.name or f"{self.flow}@{self.where}"
 
     def bind(self, mesh, space):
@@ -95,6 +96,8 @@ class Load:
         return dx if self.where == "domain" else ds(ENDS[self.where])
 
     def update(self, t):
+        if self.value is self.steady and self.constant is not None:   # (its constant holds u(0), set by bind;
+            return                                                     # a value swapped in later is read)
         u = self._value(t)
         if u.shape != self.constant.value.shape:
             raise InputError(f"load {self.name}: its value at t = {t:g} has shape {u.shape}, at t = 0 it had "

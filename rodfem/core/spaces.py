@@ -28,9 +28,8 @@ class Field:
 
 
 def _dofmap_list(dofmap):
-    """The cell-to-dof array of a dofmap (a method in DOLFINx 0.5, a property later)."""
-    lst = dofmap.list() if callable(dofmap.list) else dofmap.list
-    return np.asarray(lst.array if hasattr(lst, "array") else lst)
+    """The cell-to-dof array of a dofmap, flattened."""
+    return compat.dofmap_array(dofmap).reshape(-1)
 
 
 def dofs_per_element(fields):

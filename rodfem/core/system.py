@@ -32,10 +32,12 @@ from petsc4py import PETSc
 from rodfem.core.body import Body
 from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
+from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
+from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
 
@@ -75,12 +77,17 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
+    batch = True   # the default: bodies of the same compiled forms assembled together (serial)
+
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None):
+                 momentum: Optional[bool] = None, batch: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
-        when no load acts."""
+        when no load acts.  batch: bodies of the same compiled forms assembled together
+        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
+        if batch is not None:
+            self.batch = batch
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
@@ -240,6 +247,7 @@ class System:
         if not self.single:
             self.columns.sort(key=lambda c: ("pL".index(c[4]) if c[4] in "pL" and c[5] == "_" else 2, c))
         self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
+        self._copies = {}
         self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
                        for r in refs]
@@ -248,7 +256,8 @@ class System:
                                            self.layout.create_vector(), self.integrator) if self.contacts else None)
         parts = [c for c in (self.joint_rows, self.body_contacts) if c is not None]
         self.assembler = BlockAssembler(self.layout, self.blocks,
-                                        (parts[0] if len(parts) == 1 else Couplings(parts)) if parts else None)
+                                        (parts[0] if len(parts) == 1 else Couplings(parts)) if parts else None,
+                                        batch=self.batch)
         self.X1 = self.assembler.vector
         self.X0 = self.layout.create_vector()
         self._pull(self.X1, "x1")
@@ -259,6 +268,11 @@ class System:
             start_multipliers(self)
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
+        self._scalar_forms, self._x1_values = {}, np.zeros(self.layout.size_local)
+        for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
+            self._functionals(key)
+        self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
+        self._loads = [load for r in refs for load in r.body.loads]
         self._ready = True
         return self
 
@@ -315,17 +329,22 @@ class System:
         return sides, frames, q0s, scale
 
     # -- the state: X <-> the bodies' Functions -----------------------------------
+    def _segments(self, which):
+        """The bodies' Functions x0 or x1 as segments of the block vector (one C call copies them all)."""
+        if which not in self._copies:
+            self._copies[which] = Segments([getattr(r.body, which) for r in self.bodies.values()],
+                                           [blk.lo for blk in self.blocks], [blk.hi - blk.lo for blk in self.blocks],
+                                           self.comm)
+        return self._copies[which]
+
     def _pull(self, X, which):
-        arr = X.getArray()
-        for blk, ref in zip(self.blocks, self.bodies.values()):
-            arr[blk.lo:blk.hi] = getattr(ref.body, which).x.array[: blk.hi - blk.lo]
+        self._segments(which).get(X.getArray())
 
     def _push(self, X, which):
-        arr = X.getArray(readonly=True)
-        for blk, ref in zip(self.blocks, self.bodies.values()):
-            f = getattr(ref.body, which)
-            f.x.array[: blk.hi - blk.lo] = arr[blk.lo:blk.hi]
-            f.x.scatter_forward()
+        self._segments(which).put(X.getArray(readonly=True))
+        if self.comm.size > 1:   # the ghosts
+            for r in self.bodies.values():
+                getattr(r.body, which).x.scatter_forward()
 
     def set_state(self, X):
         """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
@@ -347,14 +366,17 @@ class System:
     def set_step(self, h: float):
         """The step h of the next steps (every body's h)."""
         self.dt = float(h)
+        if getattr(self, "_h_set", None) == self.dt:   # (every body has it: a step like the last)
+            return
         for r in self.bodies.values():
             r.body.h.value = h
+        self._h_set = self.dt
 
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""
         self.build()
-        for r in self.bodies.values():
-            r.body.set_time(t)
+        for load in self._loads:   # (a Load given as an array returns at once)
+            load.update(t)
 
     def predict(self, previous, ratio=1.0):
         """Newton's start x_{n+1}^0 = x_n + r (x_n - x_{n-1}), r = h_n / h_{n-1} (`ratio`; 2 x_n - x_{n-1}
@@ -446,9 +468,18 @@ class System:
 
     # -- evaluation -------------------------------------------------------------
     def _sum(self, key):
-        local = sum(fem.assemble_scalar(self.compiled[(n, key)]) for n in self.bodies
-                    if self.compiled.get((n, key)) is not None)
-        return self.comm.allreduce(local, op=MPI.SUM)
+        """The sum over the bodies of the functional `key` at their states x1 (summed in the bodies' order)."""
+        X = self._x1_values
+        self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
+        return self.comm.allreduce(sum(self._functionals(key).values(X)), op=MPI.SUM)
+
+    def _functionals(self, key):
+        """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
+        if key not in self._scalar_forms:
+            forms = [self.compiled.get((n, key)) for n in self.bodies]
+            self._scalar_forms[key] = Functionals(forms, [r.body.x1 for r in self.bodies.values()],
+                                                  [blk.lo for blk in self.blocks], self.layout.size_local, self.batch)
+        return self._scalar_forms[key]
 
     def assemble(self, compiled) -> float:
         """A compiled scalar form, summed over the ranks."""
@@ -490,8 +521,8 @@ class System:
             obs.update({k[4:]: self._sum(k) for k in self.columns})
         if self.body_contacts is not None:
             obs.update(self.body_contacts.observe(self.X1))
-        for name, ref in self.bodies.items():
-            for k, value in ref.body.monitor().items():
+        for name, body in self._monitored:   # (the bodies with interactions)
+            for k, value in body.monitor().items():
                 obs[f"{name}.{k}" if name else k] = value
         for columns in self.recorders:
             obs.update(columns(self))
@@ -572,6 +603,14 @@ class PointIndex:
             j.rows = [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]    # momentum rows
             j.qcols = [k for k, g in enumerate(j.q_index) if int(g) not in self.fixed]
         self.marker_at = {name: [position[int(g)] for g in qidx] for name, (pc, qidx) in self.marker_points.items()}
+        # the joints' multiplier columns, in the joints' order: names and positions in the gathered values
+        self.lam_names = [f"{j.name}.{getattr(j, 'multiplier', 'lambda')}{i + 1}" for j in self.joints
+                          for i in range(len(j.lam_at))]
+        self.lam_at = np.array([k for j in self.joints for k in j.lam_at], dtype=np.int64)
+        # the plain joints' terms as stacked arrays (rodfem/core/joint_batch.py)
+        plain = [j for j in self.joints if batchable(j)]
+        self.batch = JointBatch(plain, self.fixed) if plain else None
+        self.unbatched = [j for j in self.joints if self.batch is None or not batchable(j)]
         self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
@@ -640,11 +679,10 @@ class PointIndex:
         obs = {}
         if self.comm.rank == 0:
             t1 = self.times[1]
-            worst = 0.0
-            for j in self.joints:
+            worst = self.batch.worst_gap(vals, t1) if self.batch is not None else 0.0
+            for j in self.unbatched:
                 worst = max(worst, float(np.max(np.abs(j.position_residual(vals[j.q_at], t1)))) if j.size else 0.0)
-                for i, lam in enumerate(vals[j.lam_at]):
-                    obs[f"{j.name}.{getattr(j, 'multiplier', 'lambda')}{i + 1}"] = float(lam)
+            obs.update(zip(self.lam_names, vals[self.lam_at].tolist()))   # every joint's multipliers
             if self.joints:
                 obs["constraint_residual"] = worst
             for c in self.components:
@@ -691,14 +729,18 @@ class JointRows:
     COMPONENT_PAIRS = (("v", "q"), ("v", "v"))                                         # and a component
 
     def __init__(self, points):
-        self.points, self.joints, self.comm = points, points.joints, points.comm
+        self.points, self.comm = points, points.comm
+        # the plain joints, stacked (rodfem/core/joint_batch.py); a subclass with terms of its own
+        # (rodfem/analysis/statics.py: the joints at rest) keeps the joint-by-joint loop
+        self.batch = points.batch if type(self).update is JointRows.update else None
+        self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
-        self.work = self.dissipated = 0.0
+        self.work = self.dissipated = self._batch_work = 0.0
         self._terms = []
 
     def entries(self):
         """(rows, cols) of every entry the joints can fill (the same on every rank)."""
-        out = []
+        out = self.batch.entries() if self.batch is not None else []
         for j in self.joints:
             v, q = j.v_index[j.rows], j.q_index[j.qcols]
             lam = j.lam_index
@@ -718,10 +760,12 @@ class JointRows:
     def update(self, X):
         """The joints' terms at the iterate X (rank 0; nothing elsewhere)."""
         vals = self.points.values(X)
-        self._terms = []
+        self._terms, self._batch_work = [], 0.0
         if self.comm.rank == 0:
             v0 = self.points.x0_values
             t0, t1, h = self.points.times
+            if self.batch is not None:
+                self._batch_work = self.batch.update(v0, vals, h, t0, t1)
             for j in self.joints:
                 self._terms.append((j, *self.terms(j, v0, vals, h, t0, t1), 0.0))
             for c in self.components:
@@ -735,7 +779,9 @@ class JointRows:
         return r_v, r_lam, (("v", "q", drv_dq), ("v", "lam", drv_dl), ("lam", "q", drl_dq), ("lam", "v", drl_dv)), work
 
     def residual(self, X, b):
-        work = lost = 0.0
+        work, lost = self._batch_work, 0.0
+        if self.batch is not None and self.comm.rank == 0:
+            self.batch.residual(b)
         for j, r_v, r_lam, _, w, d in self._terms:
             b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
                         addv=PETSc.InsertMode.ADD)
@@ -746,6 +792,8 @@ class JointRows:
         self.work, self.dissipated = self.comm.bcast((work, lost), root=0)
 
     def jacobian(self, X, A):
+        if self.batch is not None and self.comm.rank == 0:
+            self.batch.jacobian(A)
         for j, _, _, blocks, _, _ in self._terms:
             index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(len(j.lam_index))))}
             for rk, ck, block in blocks:

@@ -129,7 +129,7 @@ class BodyBlock:
             bl.set(0.0)
         fpetsc.assemble_vector(self.b, self.F)
         if self.bcs:   # (without conditions the lifting is zero, but DOLFINx would pack J's coefficients)
-            fpetsc.apply_lifting(self.b, [self.J], bcs=[self.bcs], x0=[self.vec], scale=-1.0)
+            fpetsc.apply_lifting(self.b, [self.J], [self.bcs], [self.vec], -1.0)   # (the scale: `scale` in 0.5, `alpha` in 0.9)
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         if self.bcs:
             fpetsc.set_bc(self.b, self.bcs, self.vec, -1.0)
@@ -165,17 +165,23 @@ class BlockAssembler:
     ``update(X)`` called before either with the iterate.
     """
 
-    def __init__(self, layout, blocks, coupling=None):
+    def __init__(self, layout, blocks, coupling=None, batch=False):
+        """batch: assemble bodies of the same compiled forms together (rodfem/fem/batch.py; serial)."""
         self.layout, self.blocks, self.coupling = layout, list(blocks), coupling
         self.comm = layout.comm
         for i, blk in enumerate(self.blocks):
             blk.place(layout, i)
         self.bcs = [bc for blk in self.blocks for bc in blk.bcs]
         self.vector = layout.create_vector()    # the unknown X that Newton iterates on
-        entries = [blk.entries() for blk in self.blocks] + (coupling.entries() if coupling else [])
+        self.batches, self.single = [], self.blocks
+        if batch and self.comm.size == 1:
+            from rodfem.fem.batch import group
+            self.batches, self.single = group(self.blocks, layout.size_local)
+        self.units = self.batches + self.single   # what assembles: batches, and the blocks on their own
+        entries = [u.entries() for u in self.units] + (coupling.entries() if coupling else [])
         self.A = layout.create_matrix(entries)
-        for blk in self.blocks:
-            blk.attach(self.A)
+        for u in self.units:
+            u.attach(self.A)
         self._state = self._nonzero_state(self.A)
 
     def create_vector(self):
@@ -186,13 +192,20 @@ class BlockAssembler:
 
     def update(self, xin):
         """Make the forms see the iterate xin (into X and every body's Function)."""
+        X = self._iterate(xin)
+        for batch in self.batches:
+            batch.sync(X)
+
+    def _iterate(self, xin):
+        """X <- xin, seen by the bodies on their own and the coupling (a batch reads X itself)."""
         if xin.handle != self.vector.handle:
             xin.copy(self.vector)
         X = self.vector.getArray(readonly=True)
-        for blk in self.blocks:
+        for blk in self.single:
             blk.set_state(X)
         if self.coupling:
             self.coupling.update(self.vector)
+        return X
 
     def pull(self):
         """X <- every block's Function (the reverse of `update`)."""
@@ -201,10 +214,12 @@ class BlockAssembler:
             X[blk.lo:blk.hi] = blk.x.x.array[: blk.hi - blk.lo]
 
     def residual(self, xin, b):
-        self.update(xin)
+        X = self._iterate(xin)
         arr = b.getArray()
         arr[:] = 0.0
-        for blk in self.blocks:
+        for batch in self.batches:
+            batch.residual(X, arr)
+        for blk in self.single:
             blk.residual(arr)
         del arr
         if self.coupling:
@@ -213,17 +228,18 @@ class BlockAssembler:
             b.assemblyEnd()
 
     def jacobian(self, xin, A):
+        X = self.vector.getArray(readonly=True)   # the iterate of the last residual (SNES: the same x)
         while True:
             A.zeroEntries()
-            if all(blk.add_jacobian(A) for blk in self.blocks):
+            if all(u.add_jacobian(A, X) for u in self.batches) and all(blk.add_jacobian(A) for blk in self.single):
                 break
         if self.coupling:
             self.coupling.jacobian(self.vector, A)
         A.assemble()
         state = self._nonzero_state(A)
         if state != self._state:   # an entry outside the pattern was inserted: re-read the structure
-            for blk in self.blocks:
-                blk.restructure()
+            for u in self.units:
+                u.restructure()
             self._state = state
 
     @staticmethod

@@ -35,6 +35,15 @@ def mixed_element(elements):
     return ufl.MixedElement(elements)
 
 
+def abstract_mesh(cell="interval", gdim=1):
+    """A UFL mesh without a DOLFINx mesh behind it (for UFL expressions in x alone): affine
+    Lagrange coordinates on `cell` in `gdim` dimensions."""
+    if not LEGACY_UFL:  # pragma: no cover
+        import basix.ufl
+        return ufl.Mesh(basix.ufl.element("Lagrange", cell, 1, shape=(gdim,)))
+    return ufl.Mesh(ufl.VectorElement("Lagrange", getattr(ufl, cell), 1, dim=gdim))
+
+
 def functionspace(mesh, el):
     if hasattr(fem, "functionspace"):  # pragma: no cover
         return fem.functionspace(mesh, el)
@@ -56,9 +65,87 @@ def settle_coordinate_element(mesh):
         domain._ufl_coordinate_element = ufl.VectorElement(equispaced)
 
 
+def dofmap_array(dofmap):
+    """The cell-to-dof array of a dofmap, one row per cell (0.5: an AdjacencyList from
+    ``dofmap.list()``; 0.9: a two-dimensional array, ``dofmap.map()`` of the C++ dofmap or the
+    ``list`` property of the Python one)."""
+    import numpy as np
+    if hasattr(dofmap, "map"):  # pragma: no cover - DOLFINx >= 0.7
+        return np.asarray(dofmap.map())
+    lst = dofmap.list() if callable(dofmap.list) else dofmap.list
+    return _adjacency_array(lst) if hasattr(lst, "offsets") else np.asarray(lst)
+
+
+def _adjacency_array(adj):
+    """An AdjacencyList of equal-length rows as a two-dimensional array."""
+    import numpy as np
+    n = int(adj.offsets[1] - adj.offsets[0]) if len(adj.offsets) > 1 else 0
+    return np.asarray(adj.array).reshape(-1, n) if n else np.zeros((0, 0), np.int32)
+
+
+def geometry_dofmap(mesh):
+    """The cell-to-geometry-node array of a mesh, one row per cell (0.5: an AdjacencyList;
+    0.9: a two-dimensional array)."""
+    import numpy as np
+    g = mesh.geometry.dofmap
+    if hasattr(g, "offsets"):
+        return _adjacency_array(g)
+    return np.asarray(g)  # pragma: no cover - DOLFINx >= 0.7
+
+
+def cpp_form(compiled):
+    """The C++ form behind a compiled form (0.5: the form is its own C++ object; 0.9: ``_cpp_object``)."""
+    return getattr(compiled, "_cpp_object", compiled)
+
+
+def integral_ids(compiled, itype):
+    """The subdomain ids of the integrals of type `itype` of a compiled form."""
+    return list(cpp_form(compiled).integral_ids(itype))
+
+
+def integration_domain(compiled, itype, i):
+    """The entities integral (itype, i) runs over: cells, or (cell, local facet) pairs flattened."""
+    return cpp_form(compiled).domains(itype, i)
+
+
+def kernel(compiled, itype, i):
+    """The ufcx integral (its ``tabulate_tensor_float64`` is the element kernel) of integral
+    (itype, i): 0.5 keeps per-type arrays (``integrals(code)``, ``integral_ids(code)``); ufcx 0.9 one
+    flat array ``form_integrals`` with ``form_integral_ids`` and offsets per type.  The kernel's
+    signature is the same in both: (A, w, c, coordinate_dofs, entity_local_index, permutation)."""
+    from dolfinx.fem import IntegralType
+    code = {IntegralType.cell: 0, IntegralType.exterior_facet: 1, IntegralType.interior_facet: 2}[itype]
+    ufcx = compiled.ufcx_form
+    if hasattr(ufcx, "form_integrals"):  # pragma: no cover - ufcx >= 0.7
+        lo, hi = ufcx.form_integral_offsets[code], ufcx.form_integral_offsets[code + 1]
+        ids = [ufcx.form_integral_ids[k] for k in range(lo, hi)]
+        return ufcx.form_integrals[lo + ids.index(i)]
+    ids = [ufcx.integral_ids(code)[k] for k in range(ufcx.num_integrals(code))]
+    return ufcx.integrals(code)[ids.index(i)]
+
+
+def pack_coefficients(compiled):
+    """{(itype, id): coefficients packed per entity} of a compiled form, as its kernels take them."""
+    from dolfinx import cpp
+    return cpp.fem.pack_coefficients(cpp_form(compiled))
+
+
+def pack_constants(compiled):
+    from dolfinx import cpp
+    return cpp.fem.pack_constants(cpp_form(compiled))
+
+
 def petsc_vec(u):
     """The PETSc vector behind a dolfinx Function."""
     return u.x.petsc_vec if hasattr(u.x, "petsc_vec") else u.vector
+
+
+def eval_expression(expr, mesh, cells):
+    """A compiled fem.Expression evaluated on `cells` (0.5: ``eval(cells)``; 0.9: ``eval(mesh, cells)``)."""
+    first = next(iter(inspect.signature(expr.eval).parameters))
+    if first == "mesh":  # pragma: no cover - DOLFINx >= 0.8
+        return expr.eval(mesh, cells)
+    return expr.eval(cells)
 
 
 def form(f):
@@ -141,7 +228,9 @@ def jit_cache_dir():
 def hook_jit_lookup(before):
     """Have ffcx call before(module_name, cache_dir) each time it looks a module up in the JIT cache
     (where it either loads a compiled module or claims it and compiles): ffcx's
-    ``codegeneration.jit.get_cached_module``.  False if this ffcx has no such function."""
+    ``codegeneration.jit.get_cached_module``.  A module found once is remembered for the process
+    (ffcx lists the whole cache directory at every lookup: with thousands of modules cached that was
+    18 ms per body built, issue 26).  False if this ffcx has no such function."""
     import functools
 
     import ffcx.codegeneration.jit as ffcx_jit
@@ -151,10 +240,18 @@ def hook_jit_lookup(before):
     if getattr(lookup, "rodfem_hook", None) is not None:
         lookup = lookup.rodfem_hook
 
+    loaded = {}   # modules this process has loaded: ffcx would list the cache directory again for each
+
     @functools.wraps(lookup)
     def hooked(module_name, object_names, cache_dir, *args, **kwargs):
+        key = (module_name, tuple(object_names), str(cache_dir))
+        if key in loaded:   # (the same compiled objects: a module is loaded once per process anyway)
+            return loaded[key]
         before(module_name, cache_dir)
-        return lookup(module_name, object_names, cache_dir, *args, **kwargs)
+        found = lookup(module_name, object_names, cache_dir, *args, **kwargs)
+        if found[0] is not None:
+            loaded[key] = found
+        return found
     hooked.rodfem_hook = lookup
     ffcx_jit.get_cached_module = hooked
     return True

@@ -33,7 +33,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from rodfem.fem import cbuild, petsc_raw
+from rodfem.fem import cbuild, compat, petsc_raw
 
 SPARSE_ENOUGH = 1 / 3   # keep the pattern of possible nonzeros when it has at most this share of DOLFINx's
 DRAWS = (1.0, 1e-3)     # scales of the random states that find the possible nonzeros
@@ -73,7 +73,8 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff)
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff,
+                    const int32_t* cbody, int kstride)
 {
   kernel_t kernel = (kernel_t)kernel_address;
   double* Ae = malloc(sizeof(double) * nd * nd);
@@ -94,7 +95,8 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets,
       for (int d = 0; d < 3; ++d)
         coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
     memset(Ae, 0, sizeof(double) * nd * nd);
-    kernel(Ae, coeffs + (size_t)e * cstride, consts, coords, facets ? facets + e : NULL, &perm);
+    kernel(Ae, coeffs + (size_t)e * cstride, cbody ? consts + (size_t)cbody[e] * kstride : consts, coords,
+           facets ? facets + e : NULL, &perm);
     /* columns of this cell: owned ones by local index, ghost ones by their off-diagonal column */
     int nD = 0, nO = 0;
     for (int j = 0; j < nd; ++j) {
@@ -186,6 +188,48 @@ void rodfem_set(double* a, int n, const int64_t* positions, double value)
 {
   for (int k = 0; k < n; ++k) a[positions[k]] = value;
 }
+
+/* b[dofs of the entity] += element vector, for `n` entities of many bodies (rodfem/fem/batch.py):
+   entity e's coefficients at coeffs + e * cstride, its constants at consts + cbody[e] * kstride */
+void rodfem_batch_vector(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* b)
+{
+  kernel_t kernel = (kernel_t)kernel_address;
+  double be[512];
+  double coords[3 * 64];
+  uint8_t perm = 0;
+  for (int e = 0; e < n; ++e) {
+    int32_t c = cells[e];
+    for (int k = 0; k < nx; ++k)
+      for (int d = 0; d < 3; ++d)
+        coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
+    memset(be, 0, sizeof(double) * nd);
+    kernel(be, coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords, facets ? facets + e : NULL, &perm);
+    const int32_t* cd = dofs + (size_t)c * nd;
+    for (int i = 0; i < nd; ++i) b[cd[i]] += be[i];
+  }
+}
+
+/* out[cbody[e]] += the functional's value on entity e (one number per body) */
+void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* out)
+{
+  kernel_t kernel = (kernel_t)kernel_address;
+  double coords[3 * 64];
+  uint8_t perm = 0;
+  for (int e = 0; e < n; ++e) {
+    int32_t c = cells[e];
+    for (int k = 0; k < nx; ++k)
+      for (int d = 0; d < 3; ++d)
+        coords[3 * k + d] = x[3 * (size_t)xdofs[(size_t)c * nx + k] + d];
+    kernel(out + cbody[e], coeffs + (size_t)e * cstride, consts + (size_t)cbody[e] * kstride, coords,
+           facets ? facets + e : NULL, &perm);   /* the kernel adds to its body's sum, as in DOLFINx */
+  }
+}
 """
 
 C_DECL = """
@@ -195,12 +239,41 @@ int rodfem_assemble(int n, const int32_t* cells, const int32_t* facets, uintptr_
                     const int8_t* bc, int nown,
                     const int32_t* di, const int32_t* dj, double* da,
                     const int32_t* oi, const int32_t* oj, double* oa, const int32_t* ghost_col,
-                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff);
+                    int32_t* grow, int32_t* gcol, double* gval, int gcap, int roff,
+                    const int32_t* cbody, int kstride);
 void rodfem_element_pattern(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
                             int nd, int nx, const int32_t* xdofs, const double* x,
                             const double* coeffs, int cstride, const double* consts, uint8_t* mask);
 void rodfem_set(double* a, int n, const int64_t* positions, double value);
+void rodfem_batch_vector(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* b);
+void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uintptr_t kernel_address,
+                         int nx, const int32_t* xdofs, const double* x,
+                         const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
+                         int kstride, double* out);
 """
+
+def form_integrals(form):
+    """[(integral type, id, kernel address, cells, local facets or None)] of a compiled form, cell
+    integrals first (the order of DOLFINx's assembly)."""
+    from dolfinx.fem import IntegralType
+    ffi = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, form.mesh.comm).ffi
+    codes = {IntegralType.cell: 0, IntegralType.exterior_facet: 1}
+    out = []
+    for itype in sorted(form.integral_types, key=lambda t: codes[t]):
+        for i in compat.integral_ids(form, itype):
+            address = int(ffi.cast("uintptr_t", compat.kernel(form, itype, i).tabulate_tensor_float64))
+            dom = np.asarray(compat.integration_domain(form, itype, i), dtype=np.int32)
+            if itype == IntegralType.cell:
+                cells, facets = np.ascontiguousarray(dom.reshape(-1)), None
+            else:
+                dom = dom.reshape(-1, 2)
+                cells, facets = np.ascontiguousarray(dom[:, 0]), np.ascontiguousarray(dom[:, 1])
+            out.append((itype, i, address, cells, facets))
+    return out
+
 
 class _Block:
     """A sequential AIJ block: its structure (copied once) and its values (open/close)."""
@@ -235,18 +308,16 @@ class FastJacobian:
                 and set(J.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet})
 
     def __init__(self, J, bcs):
-        from dolfinx.fem import IntegralType
         self.J, self.bcs = J, list(bcs)
         V = J.function_spaces[0]
         self.mod = cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, V.mesh.comm)
         self.V = V
         mesh = V.mesh
-        dofmap_list = V.dofmap.list() if callable(V.dofmap.list) else V.dofmap.list
-        self.dofs = np.ascontiguousarray(dofmap_list.array, dtype=np.int32)
+        self.dofs = np.ascontiguousarray(compat.dofmap_array(V.dofmap), dtype=np.int32).reshape(-1)
         self.nd = V.dofmap.dof_layout.num_dofs
-        self.xdofs = np.ascontiguousarray(mesh.geometry.dofmap.array, dtype=np.int32)
-        offsets = mesh.geometry.dofmap.offsets
-        self.nx = int(offsets[1] - offsets[0]) if len(offsets) > 1 else 0   # (a rank without cells: none)
+        xdofs = compat.geometry_dofmap(mesh)
+        self.xdofs = np.ascontiguousarray(xdofs, dtype=np.int32).reshape(-1)
+        self.nx = xdofs.shape[1] if xdofs.size else 0   # (a rank without cells: none)
         assert self.nx <= 64
         im = V.dofmap.index_map
         self.nown, nghost = im.size_local, im.num_ghosts
@@ -256,23 +327,7 @@ class FastJacobian:
             bc[idx] = 1
         self.bc = bc
         self.bc_rows = np.flatnonzero(bc[:self.nown]).astype(np.int32)
-        ufcx = J.ufcx_form
-        codes = {IntegralType.cell: 0, IntegralType.exterior_facet: 1}
-        ffi = self.mod.ffi
-        self.integrals = []
-        for itype in sorted(J.integral_types, key=lambda t: codes[t]):
-            code = codes[itype]
-            uids = [ufcx.integral_ids(code)[k] for k in range(ufcx.num_integrals(code))]
-            for i in J.integral_ids(itype):
-                integral = ufcx.integrals(code)[uids.index(i)]
-                address = int(ffi.cast("uintptr_t", integral.tabulate_tensor_float64))
-                dom = np.asarray(J.domains(itype, i), dtype=np.int32)
-                if itype == IntegralType.cell:
-                    cells, facets = np.ascontiguousarray(dom.reshape(-1)), None
-                else:
-                    dom = dom.reshape(-1, 2)
-                    cells, facets = np.ascontiguousarray(dom[:, 0]), np.ascontiguousarray(dom[:, 1])
-                self.integrals.append((itype, i, address, cells, facets))
+        self.integrals = form_integrals(J)
         self.comm = mesh.comm
         masks = self._element_masks()
         share = self.comm.allreduce(max((m.mean() for m in masks), default=1.0), op=MPI.MAX)
@@ -393,9 +448,8 @@ class FastJacobian:
 
     def _packed(self):
         """The form's coefficients (dict by integral) and constants, as the kernels take them."""
-        import dolfinx.cpp as cpp
-        coeffs = cpp.fem.pack_coefficients(self.J)
-        consts = np.ascontiguousarray(cpp.fem.pack_constants(self.J), dtype=np.float64)
+        coeffs = compat.pack_coefficients(self.J)
+        consts = np.ascontiguousarray(compat.pack_constants(self.J), dtype=np.float64)
         return coeffs, consts
 
     def add(self, A):
@@ -427,7 +481,7 @@ class FastJacobian:
                     st["di"], st["dj"], da, st["oi"], st["oj"], oa, st["ghost_col"],
                     ffi.from_buffer("int32_t[]", self.grow[ng_total:]),
                     ffi.from_buffer("int32_t[]", self.gcol[ng_total:]),
-                    ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total, self.roff)
+                    ffi.from_buffer("double[]", self.gval[ng_total:]), self.gcap - ng_total, self.roff, ffi.NULL, 0)
                 if ng < 0:
                     break
                 ng_total += ng

@@ -276,4 +276,8 @@ def compile_forms(forms):
             f.signature()  # computed (and kept by UFL) before any compilation
     comm = compat.form_comm(next(f for f in forms.values() if f is not None))
     with locked(comm):
-        return {k: compat.form(f) if f is not None else None for k, f in forms.items()}
+        compiled = {k: compat.form(f) if f is not None else None for k, f in forms.items()}
+    for k, f in forms.items():   # the constants in the kernels' order (rodfem/fem/batch.py reads them)
+        if f is not None:
+            compiled[k].rodfem_constants = list(f.constants())
+    return compiled

@@ -55,6 +55,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from rodfem.errors import ParameterError, agreed
+from rodfem.fem import compat
 from rodfem.la.lu_chain import LU_CHAIN, lu_name
 
 FORMAT = 1
@@ -82,9 +83,10 @@ def _field_keys(body, name):
         tdim = m.topology.dim
         ncells = m.topology.index_map(tdim).size_local + m.topology.index_map(tdim).num_ghosts
         x = m.geometry.x[:, 0]
+        xdofs = compat.geometry_dofmap(m)
         for c in range(ncells):
             nodes = Vi.dofmap.cell_dofs(c)
-            mid[nodes] = x[m.geometry.dofmap.links(c)].mean()
+            mid[nodes] = x[xdofs[c]].mean()
     unit = body.length * 1e-9
     keys = np.column_stack([np.rint(mid / unit), np.rint(xs / unit)]).astype(np.int64)
     return dofs, keys, Vi.dofmap.index_map.size_local

@@ -255,7 +255,8 @@ class RunWriter:
             self._file.flush()
             self._whole = self._file.tell()
         try:
-            self._csv.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+            # float(v): numpy 2 writes a np.float64's repr as "np.float64(...)"
+            self._csv.writerow({k: repr(float(v)) if isinstance(v, float) else v for k, v in row.items()})
             self._file.flush()
         except OSError:
             file, self._file, self._csv = self._file, None, None

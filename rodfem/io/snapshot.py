@@ -112,7 +112,8 @@ class BodyView:
         if not body.rigid:
             expr, names = self._compile()
             ncells = body.mesh.topology.index_map(body.mesh.topology.dim).size_local
-            cells = expr.eval(np.arange(ncells, dtype=np.int32)).reshape(ncells, 2 * self.degree + 1, -1)
+            cells = compat.eval_expression(expr, body.mesh, np.arange(ncells, dtype=np.int32))
+            cells = cells.reshape(ncells, 2 * self.degree + 1, -1)
         gathered = body.comm.gather((local, cells), root=0)
         if body.comm.rank != 0:
             return None

@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 from mpi4py import MPI
+from processes import rodfem_lines
 
 from rodfem import Load, Support, System, ramp, run
 from rodfem.analysis.statics import Statics, solve
@@ -138,7 +139,7 @@ def test_no_equilibrium_fails_the_same_way_on_two_ranks(rodfem, tmp_path):
     for np_ in (None, 2):
         p = rodfem("static", "flying-spaghetti-2d", "--time", "1", "--out", tmp_path / f"np{np_}", np=np_,
                    timeout=300)
-        lines = p.stderr.strip().splitlines()
+        lines = rodfem_lines(p.stderr)
         assert p.returncode == 3 and len(lines) == 1, p.stderr[-2000:]
         assert lines[0].startswith("rodfem: error: static solve failed at load factor 0: "), lines
 

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import REPO, RODFEM, command, environment, popen, rodfem, summary
+from processes import REPO, RODFEM, command, environment, popen, rodfem, rodfem_lines, summary
 
 from rodfem.app.cli import main
 
@@ -23,7 +23,7 @@ LONG = ["flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=1000", "
 
 def one_line(stderr, start="rodfem: error:"):
     """The single line on stderr (asserted), starting with `start`."""
-    lines = stderr.strip().splitlines()
+    lines = rodfem_lines(stderr)
     assert len(lines) == 1 and lines[0].startswith(start), stderr[-3000:]
     return lines[0]
 
@@ -417,7 +417,7 @@ def test_mpi_a_held_jit_cache_lock(tmp_path):
         p = rodfem("run", *RU, "--out", tmp_path / "o", np=2, timeout=120,
                    env={"XDG_CACHE_HOME": str(cache), "RODFEM_JIT_LOCK_TIMEOUT": "1"})
     assert p.returncode == 2, p.stderr[-3000:]   # 124: timeout, a rank was left waiting
-    assert p.stderr.strip().splitlines()[-1].startswith("rodfem: error: the JIT cache lock")
+    assert rodfem_lines(p.stderr)[-1].startswith("rodfem: error: the JIT cache lock")
 
 
 @pytest.mark.mpi

@@ -187,7 +187,7 @@ def test_two_ranks_equal_serial():
     """The same user loop under mpirun -n 2 (rank 0 gives the inputs): the serial outputs."""
     rows = []
     for np_ in (1, 2):
-        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n", str(np_),
+        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(np_),
                sys.executable, "-c", SCRIPT]
         env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
         p = subprocess.run(["timeout", "300", *cmd], capture_output=True, text=True, env=env, cwd=REPO, timeout=330)

@@ -247,7 +247,7 @@ def test_two_point_masses_under_a_domain_load_follow_the_closed_form():
     import sys
 
     from processes import environment
-    mpirun = ["timeout", "300", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n", "2"]
+    mpirun = ["timeout", "300", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", "2"]
     for launcher in ([], mpirun):   # two ranks: the parallel solver's SNES was left to PETSc's finalization
         p = subprocess.run([*launcher, sys.executable, "-c", code], capture_output=True, text=True,
                            env=environment(), timeout=330)

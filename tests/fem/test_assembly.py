@@ -39,10 +39,10 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     from rodfem.fem import compat
     from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock
     mesh = dmesh.create_interval(MPI.COMM_WORLD, 8, [0.0, 1.0])
-    P1 = ufl.FiniteElement("P", mesh.ufl_cell(), 1)
-    V = fem.FunctionSpace(mesh, ufl.MixedElement([P1] * 4))
+    P1 = compat.element("P", mesh, 1)
+    V = compat.functionspace(mesh, compat.mixed_element([P1] * 4))
     u, v = ufl.TrialFunctions(V), ufl.TestFunctions(V)
-    w = fem.Function(fem.FunctionSpace(mesh, P1))
+    w = fem.Function(compat.functionspace(mesh, P1))
     a = sum(u[i] * v[i] for i in range(4)) * ufl.dx + ufl.conditional(ufl.gt(w, 1e6), w, 0.0) * u[1] * v[0] * ufl.dx
     J = compat.form(a)
     x = fem.Function(V)

@@ -249,9 +249,10 @@ def test_material_parameter_checks():
     import pytest
     import ufl
 
+    from rodfem.fem import compat
     from rodfem.forms.planar_beam import quadratic
     with pytest.raises(ValueError, match="parameter EI must be a positive number"):
         quadratic(EA=1.0, GA=1.0, EI=0.0)
     quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=-0.5)                       # signed: any number
-    x = ufl.SpatialCoordinate(ufl.Mesh(ufl.VectorElement("Lagrange", ufl.interval, 1)))
+    x = ufl.SpatialCoordinate(compat.abstract_mesh("interval", 1))
     quadratic(EA=1.0, GA=1.0, EI=1.0, kappa0=0.1 * x[0])                 # or a UFL expression

@@ -369,7 +369,7 @@ def test_rod_collision_in_parallel_equals_serial():
     the owners' rows) under mpirun -n 2 writes the serial history; the contact is on at the end."""
     rows = []
     for np_ in (1, 2):
-        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-q", "-n", str(np_),
+        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(np_),
                sys.executable, "-c", SCRIPT]
         env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
         p = subprocess.run(["timeout", "600", *cmd], capture_output=True, text=True, env=env, cwd=REPO, timeout=630)

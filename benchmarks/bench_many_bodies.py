@@ -1,0 +1,143 @@
+"""Cost per step and build time of systems of many bodies, and of small scenes (issue 26).
+
+    .venv/bin/python benchmarks/bench_many_bodies.py [--before CHECKOUT] [--quick]
+                                                    # -> benchmarks/many_bodies.{csv,md}
+
+A hanging chain of N planar steel beams pinned end to end (the first pinned to the ground), 128
+elements in total (N = 256, 1000: one element per beam), falling from horizontal under gravity:
+CPU ms per step (the better of two runs of `steps` steps, each after a fresh build in the same
+process; N = 1000: one run; CPU time of the process, not wall time: this machine is shared by
+several developers and its wall times swing by 2x) and the build's CPU time (a build after the
+first of the process: forms found in the JIT cache), for
+N = 1, 4, 16, 64, 256 and 1000; then the 10-element planar beam (flying-spaghetti-2d, 300 steps)
+and the 16-element 3D rod (flying-spaghetti-3d) in a 10-step and a 200-step run.  Each case runs
+in a process of its own, side by side for
+
+* `batch`: this checkout, bodies of the same compiled forms assembled together (rodfem/fem/batch.py),
+* `body by body`: this checkout with `System(batch=False)`,
+* `before`: another checkout (--before, e.g. a worktree of main before this work), if given.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+
+
+def chain(N, total=128):
+    """The chain of N beams (each total // N elements, at least one)."""
+    from rodfem import Load, Support
+    from rodfem.core.system import System
+    from rodfem.forms import joints
+    from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
+    s = System()
+    w, rho, E = 0.01, 7800.0, 2e9
+    A, I = w * w, w ** 4 / 12
+    model = PlanarBeam(rho * A, rho * I, quadratic(EA=E * A, GA=E / 2.6 * A, EI=E * I))
+    n, L = max(total // N, 1), 1.0 / N
+    prev = None
+    for k in range(N):
+        g = Load("v", [0.0, -rho * A * 9.81], "domain", f"gravity b{k}")
+        b = s.add(f"b{k}", model, shape=straight((k * L, 0.0), ((k + 1) * L, 0.0)), n_elements=n, loads=[g],
+                  supports=[Support("left", "pinned")] if k == 0 else [])
+        if prev is not None:
+            s.join(joints.pin, prev.end, b.start)
+        prev = b
+    return s
+
+
+def measure(case, batch, repeats=3):
+    """One case in this process: {ms_per_step, build_s, newton_its, F_ms, J_ms}."""
+    from mpi4py import MPI
+
+    from rodfem import run
+    kind, arg, n, steps = case
+    if kind == "chain":
+        make, dt = (lambda: chain(arg)), 1e-3
+    else:
+        from rodfem.app.scene import load
+        scene = load(arg)
+        p = scene.values({"n_elements": n})
+        make, dt = (lambda: scene.build(p, MPI.COMM_WORLD)), p["dt"]
+    from rodfem.core.system import System
+    System.batch = batch   # (an older checkout has no batch: it ignores the attribute)
+    best = None
+    for k in range(repeats):   # the first: JIT modules loaded; then the better of the others
+        t0 = time.process_time()
+        s = make()
+        s.build()
+        build = time.process_time() - t0
+        c0 = time.process_time()
+        res = run(s, dt, steps * dt)
+        cpu = time.process_time() - c0
+        t = s.newton.timings
+        row = {"ms_per_step": 1e3 * cpu / steps, "wall_ms_per_step": 1e3 * res.wall_time / steps, "build_s": build,
+               "newton_its": sum(res.column("newton_its")) / steps,
+               "F_ms": 1e3 * t["F"] / steps, "J_ms": 1e3 * t["J"] / steps}
+        if (k or repeats == 1) and (best is None or row["ms_per_step"] < best["ms_per_step"]):
+            best = dict(row, build_s=build if best is None else min(build, best["build_s"]))
+    return best
+
+
+def child(case, batch, checkout):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([checkout, HERE]), OMP_NUM_THREADS="1")
+    code = (f"import json, sys; sys.path.insert(1, {HERE!r}); from bench_many_bodies import measure; "
+            "import rodfem; assert rodfem.__file__.startswith(sys.argv[1]), rodfem.__file__; "
+            f"print('RESULT', json.dumps(measure({tuple(case)!r}, {batch!r}, {2 if case[1] == 1000 else 3})))")
+    # (run in the checkout: `python -c` puts the working directory first on the path)
+    out = subprocess.run([sys.executable, "-c", code, checkout], env=env, capture_output=True, text=True, check=True,
+                         cwd=checkout)
+    return json.loads(next(x for x in out.stdout.splitlines() if x.startswith("RESULT"))[6:])
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--before", help="another checkout to measure side by side (e.g. main before this work)")
+    ap.add_argument("--quick", action="store_true", help="N up to 64, no 1000-body chain")
+    args = ap.parse_args()
+    from report import write_report
+    cases = [("chain", N, None, 20) for N in (1, 4, 16, 64, 256)]
+    if not args.quick:
+        cases.append(("chain", 1000, None, 5))
+    cases += [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-3d", 16, 10),
+              ("scene", "flying-spaghetti-3d", 16, 200)]
+    if args.quick:
+        cases = [c for c in cases if not (c[0] == "chain" and c[1] > 64)]
+    codes = [("batch", True, ROOT), ("body by body", False, ROOT)]
+    if args.before:
+        codes.append(("before", True, os.path.abspath(args.before)))
+    rows = []
+    for case in cases:
+        row = {"case": f"chain of {case[1]} beams" if case[0] == "chain" else f"{case[1]} ({case[2]} el.)",
+               "steps": case[3]}
+        for label, batch, checkout in codes:
+            if label != "batch" and case[0] == "chain" and case[1] == 1000:
+                continue   # (body by body: minutes per run)
+            r = child(case, batch, checkout)
+            for k, v in r.items():
+                row[f"{label}:{k}"] = v
+            print(row["case"], label, r, flush=True)
+        rows.append(row)
+    columns = [("case", "{}"), ("steps", "{}")]
+    for label, _, _ in codes:
+        columns += [(f"{label}:ms_per_step", lambda r, k=f"{label}:ms_per_step": f"{r[k]:.3f}" if k in r else "",
+                     f"{label} ms/step"),
+                    (f"{label}:build_s", lambda r, k=f"{label}:build_s": f"{r[k]:.2f}" if k in r else "",
+                     f"{label} build s")]
+    load = os.getloadavg()[0]
+    write_report("many_bodies", rows, columns, "Many bodies and small scenes: cost per step and build time",
+                 intro=["Chain: N planar beams pinned end to end, 128 elements in total (N >= 128: one per beam), "
+                        "h = 1 ms; scenes at their default h.  ms/step: CPU time of the process per step, the better "
+                        "of two runs; build: CPU seconds of a build after the first of a process (JIT cache warm). "
+                        "Serial, one thread."],
+                 notes=[f"Load average while this ran: {load:.1f} on 2 cores (the machine is shared: +-50 % "
+                        "between runs is usual)."])
+
+
+if __name__ == "__main__":
+    main()

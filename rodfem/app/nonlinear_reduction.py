@@ -1,0 +1,98 @@
+"""`rodfem reduce SCENE --nonlinear --order r [r ...] --test NAME=VALUE ...`: the nonlinear reduced model
+(rodfem/analysis/galerkin.py) of a scene, trained on one run and checked on it and on another input.
+
+The training run is the scene with its parameters (its own u(t)); its states at every step are the
+snapshots.  The test run is the scene with the `test` parameters on top (e.g. another load amplitude:
+the same mesh, another input).  For each order r (POD modes per block) the reduced model runs both
+inputs from the same initial state; reported per run: the errors against the full model
+
+    configuration   max_n |q_r(t_n) - q(t_n)| / max_n |q(t_n) - q(t_0)|   (all configuration dofs)
+    <column>        max_n |c_r - c| / max_n |c - c(t_0)|  for the position columns (tip_*, mean_*)
+
+the largest energy-balance residual relative to max |H|, and the wall times (full and reduced loop, the
+reduced model's time split into assembly, projection and solve) and the speed-up full / reduced.
+"""
+import json
+import os
+import time
+
+import numpy as np
+from mpi4py import MPI
+
+from rodfem.analysis.galerkin import ReducedSystem, layout, pod_basis
+from rodfem.analysis.timeloop import run
+from rodfem.app.analyses import resolve
+from rodfem.errors import ParameterError
+
+
+def full_run(problem, dt, t_end):
+    """The full model's run: (history, states as columns, the first x_0)."""
+    states = [problem.snapshot()[0]]
+    res = run(problem, dt, t_end, after_step=lambda *a, **k: states.append(problem.state()))
+    return res, np.array(states).T
+
+
+def reduced_run(problem, basis, dt, t_end, x0):
+    """The reduced model's run from the full state x0 (the problem's clock restarted at 0): (history, states, model)."""
+    rom = ReducedSystem(problem, basis, start=x0)
+    states = [rom.basis.full(rom.xi0)]
+    res = run(rom, dt, t_end, after_step=lambda *a, **k: states.append(rom.state()))
+    return res, np.array(states).T, rom
+
+
+def errors(full, full_states, red, red_states, lay):
+    """The errors of the module docstring and the reduced run's largest relative balance residual."""
+    q = lay.q
+    dq = np.linalg.norm(full_states[q] - full_states[q][:, :1], axis=0).max()
+    out = {"configuration": float(np.linalg.norm(red_states[q] - full_states[q], axis=0).max() / max(dq, 1e-300))}
+    for c in full.rows[0]:
+        if c.startswith(("tip_", "mean_")):
+            a, b = full.column(c), red.column(c)
+            out[c] = float(np.abs(b - a).max() / max(np.abs(a - a[0]).max(), 1e-300))
+    H = max(np.abs(red.column("H")).max(), 1e-300)
+    out["balance_relative"] = float(red.max_balance_error / H)
+    out["H_max"] = float(H)
+    return out
+
+
+def run_nonlinear_reduce(scene, overrides=None, test=None, orders=(4, 8, 16), out=None, comm=MPI.COMM_WORLD):
+    """Train, reduce and check (see the module docstring); returns the content of nonlinear_reduce.json."""
+    from rodfem.app.driver import build
+    orders = sorted({int(r) for r in orders})
+    if not orders or orders[0] < 1:
+        raise ParameterError(f"--order must be integers >= 1 (POD modes per block; got {orders})")
+    if comm.size > 1:
+        raise ParameterError("the nonlinear reduced model runs serially (run it without mpirun)")
+    scene, p = resolve(scene, overrides)
+    cases = {"train": p}
+    if test:
+        _, cases["test"] = resolve(scene, {**(overrides or {}), **test})
+    info = {"scene": scene.name, "parameters": p, "test_parameters": {k: cases["test"][k] for k in test} if test else {},
+            "orders": {}, "runs": {}}
+    data = {}
+    for name, q in cases.items():
+        problem = build(scene, q, comm)
+        lay = layout(problem)
+        res, X = full_run(problem, q["dt"], q["t_end"])
+        data[name] = (problem, res, X, q)
+        info["runs"][name] = {"steps": res.steps, "full_wall_time_s": res.wall_time,
+                              "full_ms_per_step": 1e3 * res.wall_time / res.steps, "dofs": int(X.shape[0]),
+                              "full_balance_relative": float(res.max_balance_error / max(np.abs(res.column("H")).max(), 1e-300))}
+    X_train = data["train"][2]
+    for r in orders:
+        basis = pod_basis(X_train, r, lay, problem=data["train"][0])
+        entry = {"modes_per_block": basis.ranks, "reduced_unknowns": basis.order}
+        for name, (problem, res, X, q) in data.items():
+            t0 = time.perf_counter()
+            red, S, rom = reduced_run(problem, basis, q["dt"], q["t_end"], X[:, 0])
+            wall = time.perf_counter() - t0
+            entry[name] = {"errors": errors(res, X, red, S, lay), "wall_time_s": red.wall_time,
+                           "ms_per_step": 1e3 * red.wall_time / red.steps, "speed_up": res.wall_time / red.wall_time,
+                           "newton_iterations_per_step": rom.iterations / red.steps,
+                           "time_split_s": dict(rom.timings), "set_up_s": wall - red.wall_time}
+        info["orders"][str(r)] = entry
+    if out:
+        os.makedirs(out, exist_ok=True)
+        with open(os.path.join(out, "nonlinear_reduce.json"), "w") as fh:
+            json.dump(info, fh, indent=2, default=float)
+    return info
