@@ -234,7 +234,7 @@ class PlanarBeam:
             W = W + b.spring(x[f"Gamma_{j}"], x[f"kappa_{j}"])
         return (0.5 * c["rhoA"] * ufl.inner(x["v"], x["v"]) + 0.5 * c["rhoI"] * x["omega"] ** 2 + W) * dx
 
-    def efforts(self, step, domain):
+    def energy_efforts(self, step, domain):
         """(N, M): the discrete gradient (or midpoint derivative) of W(Gamma, kappa) (UFL)."""
         return step.effort(self.energy, ["Gamma", "kappa"])
 
@@ -251,7 +251,7 @@ class PlanarBeam:
         dr, dphi, dv, dw, dG, dk = (test[n] for n in ("r", "phi", "v", "omega", "Gamma", "kappa"))
         r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")
         A = rotation(step.mid("phi"))
-        N, M = self.efforts(step, dx.ufl_domain())
+        N, M = self.energy_efforts(step, dx.ufl_domain())
         projection = 0
         if self.projected:
             Nh, Mh = step.x1["N"], step.x1["M"]

@@ -28,7 +28,7 @@ with Fourier conduction (kappa_th = conductivity x area) and the heat ports (for
 
     theta d_t eta = d_s (kappa_th d_s theta)  (+ heat ports).
 
-Discrete gradient (`efforts`): e is W(Gamma, kappa) + the linear beta theta0 Gamma_1 + T(xi),
+Discrete gradient (`energy_efforts`): e is W(Gamma, kappa) + the linear beta theta0 Gamma_1 + T(xi),
 T(xi) = c theta0 (exp(xi) - 1); the sum of the difference quotients of each term along its own
 variable (Gonzalez, J. Nonlinear Sci. 6 (1996) 449-467, doi 10.1007/BF02440162),
 
@@ -125,10 +125,10 @@ class ThermoelasticBeam(PlanarBeam):
     def _xi(self, x, k):
         return (x["eta"] - k["beta"] * x["Gamma"][0]) / k["c"]
 
-    def efforts(self, step, domain):
+    def energy_efforts(self, step, domain):
         """(z_Gamma, z_kappa) of the module docstring (UFL); z_eta in `entropy_effort`."""
         k = self.thermal.on(domain)
-        N, M = super().efforts(step, domain)
+        N, M = super().energy_efforts(step, domain)
         dT = thermal_slope(step.rule, self._xi(step.x0, k), self._xi(step.x1, k), k["c"], k["theta0"])
         return N + (k["beta"] * k["theta0"] - k["beta"] / k["c"] * dT) * E1, M
 
