@@ -56,6 +56,7 @@ ROD_CONTACT = "tests/models/test_rod_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
+THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
@@ -706,7 +707,8 @@ MUTATIONS = [
     # -- thermoelastic string (issue 30) --
     M("conduction-without-the-product-rule", "forms/thermoelastic_string.py",
       [("- deta * theta.dx(0) / theta ** 2)\n", "- 0.0 * deta * theta.dx(0) / theta ** 2)\n")],
-      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative"],
+      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative",
+       THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
       "the conduction term kappa theta' (deta/theta)' written as kappa theta' deta'/theta: the energy test "
       "theta no longer cancels it (conduction creates or destroys energy)"),
     M("thermal-coupling-sign", "forms/thermoelastic_string.py",
@@ -721,8 +723,8 @@ MUTATIONS = [
       [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative"],
       "H's coupling term with the wrong sign: H is no longer the energy whose discrete gradient the rows use"),
     M("heat-flux-entropy-at-the-old-temperature", "forms/heat_ports.py",
-      [('return -self.constant * test["eta"] / step.x1["theta"] * ds(ENDS[self.where])',
-        'return -self.constant * test["eta"] / step.x0["theta"] * ds(ENDS[self.where])')],
+      [('return -(self.constant * test["eta"] / step.x1["theta"] + _metered',
+        'return -(self.constant * test["eta"] / step.x0["theta"] + _metered')],
       [THERMO + "::test_heat_flux_port_energy_and_mean_temperature"],
       "the flux port's entropy flow Q/theta with theta of t_n: the heat that enters is not the booked Q"),
     M("convection-power-at-the-old-temperature", "forms/heat_ports.py",
@@ -738,10 +740,47 @@ MUTATIONS = [
       [THERMO + "::test_viscous_damping_work_becomes_heat[kelvin-voigt]"],
       "the Kelvin-Voigt damping's work is not turned into heat: the total energy decays"),
     M("thermal-dg-is-midpoint", "forms/thermoelastic_string.py",
-      [('        if step.rule == "discrete-gradient":   # sinh(y)/y', '        if False:   # sinh(y)/y')],
-      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative"],
+      [('    if rule == "discrete-gradient":\n', '    if False:\n')],
+      [THERMO + "::test_total_energy_exact_and_entropy_production_nonnegative",
+       THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
       "the thermal quotient T'_bar without its sinh(y)/y factor (the midpoint derivative): e(C, eta) is "
       "exponential in eta, the energy is no longer exact"),
+    # -- thermoelastic planar beam and the heat meter (issue 30) --
+    M("beam-thermal-force-sign", "forms/thermoelastic_beam.py",
+      [('return N + (k["beta"] * k["theta0"] - k["beta"] / k["c"] * dT) * E1, M',
+        'return N + (k["beta"] * k["theta0"] + k["beta"] / k["c"] * dT) * E1, M')],
+      [THERMO_BEAM + "::test_free_thermal_expansion[hooke]",
+       THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
+      "the beam's thermal axial force with the wrong sign in the step's efforts: the heated free beam is not "
+      "stress-free at L (1 + alpha dtheta), and the rows no longer match H"),
+    M("beam-energy-coupling-sign", "forms/thermoelastic_beam.py",
+      [('return (self.energy(Gamma, kappa) + k["beta"] * k["theta0"] * Gamma[0]',
+        'return (self.energy(Gamma, kappa) - k["beta"] * k["theta0"] * Gamma[0]')],
+      [THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
+      "H's coupling term of the beam with the wrong sign: H is not the energy of the rows' discrete gradient"),
+    M("beam-efforts-not-projected", "forms/thermoelastic_beam.py",
+      [("    projects = True\n", "    projects = False\n")],
+      [THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
+      "the beam's thermal resultant (varying inside a cell with eta) used unprojected at degree 1: the strain "
+      "rows' bracket is then not the strain increment, the energy is not exact"),
+    M("beam-temperature-row-not-the-quotient", "forms/thermoelastic_beam.py",
+      [("thermal = ((theta - self.entropy_effort(step, dom)) * dth",
+        'thermal = ((theta - self.temperature(step.x1["Gamma"], step.x1["eta"], dom)) * dth')],
+      [THERMO_BEAM + "::test_total_energy_exact_and_entropy_production_nonnegative[1]"],
+      "the step's temperature the temperature of x_{n+1} instead of the discrete gradient z_eta: not exact"),
+    M("beam-dashpot-heat-dropped", "forms/thermoelastic_beam.py",
+      [("            thermal -= heat * deta / theta * dx\n", "            thermal -= 0.0 * heat * deta / theta * dx\n")],
+      [THERMO_BEAM + "::test_dashpot_work_becomes_heat[maxwell]",
+       THERMO_BEAM + "::test_dashpot_work_becomes_heat[kelvin-voigt]"],
+      "the beam's dashpot and viscous work is not turned into heat: its total energy decays"),
+    M("heat-meter-misses-convection", "forms/heat_ports.py",
+      [("_metered(test, self._flow(theta))", "_metered(test, 0.0 * self._flow(theta))")],
+      ["tests/models/test_heat_supplied.py::test_heat_supplied_apart_from_mechanical_work"],
+      "heat_supplied leaves out the convection's heat"),
+    M("heat-meter-flux-halved", "forms/heat_ports.py",
+      [("_metered(test, self.constant)", "_metered(test, 0.5 * self.constant)")],
+      ["tests/models/test_heat_supplied.py::test_constant_flux_heat_supplied_is_q_t"],
+      "heat_supplied books half the flux port's heat"),
     # -- the step interface and the reduced models (issue 29) --------------------------------------
     M("simulator-restore-keeps-the-history", "rodfem/app/simulator.py",
       [("        del self.history.rows[state.rows:]\n", "")],

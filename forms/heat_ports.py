@@ -19,13 +19,42 @@ Both are `Load`s (rodfem/core/ports.py) on the field "eta": their work is in the
 `supplied` column, so H_{n+1} - H_n = h y.u stays exact with them.  Their columns:
 `<name>_temperature` (the flux port's output) and `<name>_power` (the heat rate of the
 step, W; positive into the string).
+
+The heat supplied (`HEAT`, the model's column `heat_supplied`): the thermal models carry one more
+state, the heat q per reference length received through the heat ports since t = 0 (DG0), with
+the row (`heat_row`, and each port's power density tested with dq)
+
+    int (q_{n+1} - q_n)/h dq = sum of the ports' powers tested with dq,
+
+so that (dq = 1) int q_{n+1} - int q_n = h (the heat ports' power) exactly: the thermal part of
+`supplied`, cumulative, apart from the mechanical ports' work.  q enters neither H nor the
+other rows (a meter, not a physical state).
 """
 from dataclasses import dataclass
 
 import numpy as np
 
+from rodfem.core.model import Field
 from rodfem.core.ports import ENDS, Load
 from rodfem.errors import InputError
+
+HEAT = Field("heat", "DG", 0)
+HEAT_LABEL = {"heat": ("heat received through the heat ports since t = 0, per reference length", ())}
+
+
+def heat_row(step, test, dx):
+    """(q_{n+1} - q_n)/h dq: the meter's rate (the ports add their power densities)."""
+    return step.rate("heat") * test["heat"] * dx
+
+
+def heat_supplied(x, dx):
+    """int q: the heat supplied through the heat ports since t = 0 (J), a history column."""
+    return x["heat"] * dx
+
+
+def _metered(test, density):
+    """density dq if the model meters its heat (has the field "heat"), else 0."""
+    return density * test["heat"] if "heat" in test else 0
 
 
 @dataclass
@@ -43,8 +72,8 @@ class HeatFlux(Load):
         super().__post_init__()
 
     def input_map(self, step, test, dx, ds):
-        """-Q deta/theta at the end."""
-        return -self.constant * test["eta"] / step.x1["theta"] * ds(ENDS[self.where])
+        """-Q deta/theta at the end (and -Q dq on the heat meter)."""
+        return -(self.constant * test["eta"] / step.x1["theta"] + _metered(test, self.constant)) * ds(ENDS[self.where])
 
     def power(self, step, dx, ds):
         """Q (the entropy flow Q/theta times the energy test theta)."""
@@ -86,9 +115,9 @@ class Convection(Load):
         return self.coefficient * (self.constant - theta)
 
     def input_map(self, step, test, dx, ds):
-        """-h_c (theta_env - theta) deta/theta."""
+        """-h_c (theta_env - theta) deta/theta (and -h_c (theta_env - theta) dq on the heat meter)."""
         theta = step.x1["theta"]
-        return -self._flow(theta) * test["eta"] / theta * dx
+        return -(self._flow(theta) * test["eta"] / theta + _metered(test, self._flow(theta))) * dx
 
     def power(self, step, dx, ds):
         """h_c (theta_env - theta), the energy test theta of the entropy flow."""

@@ -198,6 +198,7 @@ class PlanarBeam:
     # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
     units = {"r": "m", "phi": "rad", "v": "m/s", "omega": "rad/s", "Gamma": "1", "kappa": "1/m", "N": "N", "M": "N m"}
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
+    projects = False   # True: the efforts N, M are projected fields at every degree (a subclass whose N is not DG_{k-1})
 
     def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None, branches=(), damping=None):
         if degree < 1:
@@ -213,7 +214,8 @@ class PlanarBeam:
         k = degree
         self.fields = [Field("r", "P", k, (2,)), Field("phi", "P", k), Field("v", "P", k, (2,)),
                        Field("omega", "P", k), Field("Gamma", "DG", k - 1, (2,)), Field("kappa", "DG", k - 1)]
-        if k >= 2:  # the efforts, projected on DG_{k-1} (module docstring); algebraic: only x_{n+1} is used
+        self.projected = k >= 2 or self.projects
+        if self.projected:  # the efforts, projected on DG_{k-1} (module docstring); algebraic: only x_{n+1} is used
             self.fields += [Field("N", "DG", k - 1, (2,)), Field("M", "DG", k - 1)]
             self.efforts = {"Gamma": "N", "kappa": "M"}   # energy variable -> its effort field (same element)
         # Maxwell branches with stiffness: their elastic strains are internal variables
@@ -232,6 +234,10 @@ class PlanarBeam:
             W = W + b.spring(x[f"Gamma_{j}"], x[f"kappa_{j}"])
         return (0.5 * c["rhoA"] * ufl.inner(x["v"], x["v"]) + 0.5 * c["rhoI"] * x["omega"] ** 2 + W) * dx
 
+    def energy_efforts(self, step, domain):
+        """(N, M): the discrete gradient (or midpoint derivative) of W(Gamma, kappa) (UFL)."""
+        return step.effort(self.energy, ["Gamma", "kappa"])
+
     def _branch_efforts(self, step, domain):
         """[(N_j, M_j, mobilities [R_EA, R_GA, R_EI])] of the Maxwell branches."""
         out = []
@@ -245,9 +251,9 @@ class PlanarBeam:
         dr, dphi, dv, dw, dG, dk = (test[n] for n in ("r", "phi", "v", "omega", "Gamma", "kappa"))
         r_s, v, w = step.mid("r").dx(0), step.mid("v"), step.mid("omega")
         A = rotation(step.mid("phi"))
-        N, M = step.effort(self.energy, ["Gamma", "kappa"])
+        N, M = self.energy_efforts(step, dx.ufl_domain())
         projection = 0
-        if self.degree >= 2:
+        if self.projected:
             Nh, Mh = step.x1["N"], step.x1["M"]
             projection = (ufl.inner(Nh - N, test["N"]) + (Mh - M) * test["M"]) * dx
             N, M = Nh, Mh
@@ -289,9 +295,14 @@ class PlanarBeam:
     def dissipation(self, step, dx, ds):
         """h d_n = h int sum_j N_j.R_j N_j + R_j M_j^2 + e.D e + alpha (rhoA v.v + rhoI omega^2) ds
         (None without branches and damping)."""
+        d = self.dissipation_density(step, dx.ufl_domain())
+        return None if d is None else step.h * d * dx
+
+    def dissipation_density(self, step, domain):
+        """d_n = sum_j N_j.R_j N_j + R_j M_j^2 + e.D e + alpha (rhoA v.v + rhoI omega^2) (UFL; None without
+        branches and damping)."""
         if not self.branches and self.damping is None:
             return None
-        domain = dx.ufl_domain()
         d = sum(R[0] * Nj[0] ** 2 + R[1] * Nj[1] ** 2 + R[2] * Mj ** 2
                 for Nj, Mj, R in self._branch_efforts(step, domain))
         if self.damping is not None:
@@ -300,7 +311,7 @@ class PlanarBeam:
             if alpha is not None:
                 c, v, w = self.densities.on(domain), step.mid("v"), step.mid("omega")
                 d = d + alpha * (c["rhoA"] * ufl.inner(v, v) + c["rhoI"] * w ** 2)
-        return step.h * d * dx
+        return d
 
     @property
     def massless(self):

@@ -102,15 +102,48 @@ entropy row, the same way: the total energy stays exact.
 
 Heat ports (forms/heat_ports.py): a heat flux Q into an end (input Q, output the end's
 temperature, power Q) and convection to an environment at theta_env (input theta_env,
-power h_c int (theta_env - theta) ds); their work is in `supplied`.
+power h_c int (theta_env - theta) ds); their work is in `supplied`, and cumulative in the column
+`heat_supplied` (the heat meter q of forms/heat_ports.py, one more DG0 state).
 """
+import numbers
+
 import numpy as np
 import ufl
 
 from rodfem.core.materials import ParameterSet
 from rodfem.core.model import Field
 from rodfem.core.ports import ENDS
+from rodfem.forms.heat_ports import HEAT, HEAT_LABEL, heat_row, heat_supplied
 from rodfem.forms.string import String, relaxed
+
+
+def thermal_slope(rule, xi0, xi1, c, theta0):
+    """T'_bar of T(xi) = c theta0 (exp(xi) - 1) between xi0 and xi1 (UFL): the discrete gradient's
+    c theta0 exp(xi_m) sinh(d xi/2)/(d xi/2) (its Taylor series where |d xi/2| <= 1e-3, d xi = 0
+    included), the midpoint rule's c theta0 exp(xi_m)."""
+    half = 0.5 * (xi1 - xi0)
+    factor = 1.0
+    if rule == "discrete-gradient":
+        factor = ufl.conditional(ufl.gt(abs(half), 1e-3), ufl.sinh(half) / ufl.conditional(
+            ufl.gt(abs(half), 1e-3), half, 1.0), 1 + half ** 2 / 6 + half ** 4 / 120)
+    return c * theta0 * ufl.exp(0.5 * (xi0 + xi1)) * factor
+
+
+def thermal_parameters(owner, alpha, c, kappa, theta0, conductivity="kappa"):
+    """(alpha, c, kappa, theta0) as floats, checked: alpha finite, c > 0, kappa >= 0, theta0 > 0
+    (ValueError naming the parameter; the conductivity's name is `conductivity`)."""
+    for name, value, low in (("alpha", alpha, None), ("c", c, 0), (conductivity, kappa, -1), ("theta0", theta0, 0)):
+        ok = isinstance(value, numbers.Real) and np.isfinite(value) and (low is None or value > low)
+        if not ok:
+            allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
+            raise ValueError(f"{owner}: {name} must be {allowed} (got {value!r})")
+    return float(alpha), float(c), float(kappa), float(theta0)
+
+
+def conduction(kappa, theta, deta):
+    """kappa d_s theta d_s(deta/theta): Fourier conduction in the entropy row (UFL); zero for deta = theta,
+    kappa (theta'/theta)^2 for deta = 1."""
+    return kappa * theta.dx(0) * (deta.dx(0) / theta - deta * theta.dx(0) / theta ** 2)
 
 
 class ThermoelasticString(String):
@@ -118,12 +151,13 @@ class ThermoelasticString(String):
     isothermal energy at theta0), rhoA, the expansion coefficient alpha (1/K), the heat capacity
     c per reference length (J/(K m), > 0), kappa = conductivity x area (W m/K, >= 0), the
     reference temperature theta0 (K, > 0); end_masses as for String."""
-    fields = String.fields + [Field("eta", "P", 1), Field("theta", "P", 1)]
+    fields = String.fields + [Field("eta", "P", 1), Field("theta", "P", 1), HEAT]
     quadrature_degree = 4   # e(C, eta) has exp(eta): a rule of degree 4 (the same in H and the rows)
     labels = {**String.labels,
               "eta": ("entropy density per reference length (the state's)", ()),
               "theta": ("the step's temperature (L2 projection of de/d eta)", ()),
-              "temperature": ("temperature theta(C, eta) = de/d eta", ())}
+              "temperature": ("temperature theta(C, eta) = de/d eta", ()), **HEAT_LABEL}
+    units = {**String.units, "eta": "J/(K m)", "theta": "K", "temperature": "K", "heat": "J/m"}
     static_fields = None   # no statics: the thermal rows have no total form here
 
     def __init__(self, material, rhoA, alpha, c, kappa, theta0, end_masses=None, branches=(), damping=None):
@@ -134,12 +168,7 @@ class ThermoelasticString(String):
         EA = material.params.get("EA")
         if EA is None:
             raise ValueError(f"material {material.name} has no parameter EA (the coupling is beta = EA alpha)")
-        for name, value, low in (("alpha", alpha, None), ("c", c, 0), ("kappa", kappa, -1), ("theta0", theta0, 0)):
-            ok = np.isfinite(value) and (low is None or value > low)
-            if not ok:
-                allowed = {None: "a finite number", 0: "a positive number", -1: "a number >= 0"}[low]
-                raise ValueError(f"ThermoelasticString: {name} must be {allowed} (got {value!r})")
-        self.alpha, self.c, self.kappa, self.theta0 = float(alpha), float(c), float(kappa), float(theta0)
+        self.alpha, self.c, self.kappa, self.theta0 = thermal_parameters("ThermoelasticString", alpha, c, kappa, theta0)
         self.beta = self.alpha * float(EA)
         self.thermal = ParameterSet(beta=self.beta, c=self.c, kappa=self.kappa, theta0=self.theta0)
 
@@ -205,9 +234,8 @@ class ThermoelasticString(String):
              + self.constants(dom)["rhoA"] * ufl.inner(step.rate("v"), dv) + S * ufl.inner(rs, dv.dx(0))
              + (step.rate("C") - 2 * ufl.inner(rs, v.dx(0))) * dC
              + (theta - zeta) * dth
-             + step.rate("eta") * deta + k["kappa"] * theta.dx(0) * (deta.dx(0) / theta
-                                                                   - deta * theta.dx(0) / theta ** 2)
-             - heat * deta / theta) * dx
+             + step.rate("eta") * deta + conduction(k["kappa"], theta, deta)
+             - heat * deta / theta) * dx + heat_row(step, test, dx)
         for i, ((Wk, R), b) in enumerate(zip(branches, self.branches), 1):   # as in forms/string.py
             row = step.rate(f"C_{i}") - 2 * ufl.inner(rs, v.dx(0)) + R * Wk
             F += b.row_scale(step, dom) * row * test[f"C_{i}"] * dx
@@ -225,12 +253,7 @@ class ThermoelasticString(String):
         k = self._t(domain)
         (zW,) = step.effort(lambda C: self.W(C, domain), ["C"])
         xi = [(x["eta"] - k["beta"] * self.coupling(x["C"])) / k["c"] for x in (step.x0, step.x1)]
-        half = 0.5 * (xi[1] - xi[0])
-        factor = 1.0
-        if step.rule == "discrete-gradient":   # sinh(y)/y, its Taylor series where |y| <= 1e-3 (y = 0 included)
-            factor = ufl.conditional(ufl.gt(abs(half), 1e-3), ufl.sinh(half) / ufl.conditional(
-                ufl.gt(abs(half), 1e-3), half, 1.0), 1 + half ** 2 / 6 + half ** 4 / 120)
-        dT = k["c"] * k["theta0"] * ufl.exp(0.5 * (xi[0] + xi[1])) * factor   # T'_bar
+        dT = thermal_slope(step.rule, xi[0], xi[1], k["c"], k["theta0"])   # T'_bar
         zC = zW + 0.5 * k["beta"] * k["theta0"] - 0.5 * k["beta"] / k["c"] * dT
         return zC, dT / k["c"]
 
@@ -251,13 +274,14 @@ class ThermoelasticString(String):
     def columns(self, x, dx, ds, length):
         """History columns of x_{n+1}: entropy int eta, mean_temperature (1/L) int theta(C, eta),
         entropy_production int kappa (d_s theta / theta)^2 of the step (theta: the step's field),
+        heat_supplied int q (forms/heat_ports.py),
         temperature_left, temperature_right theta(C, eta) at the ends, arc_length int sqrt(C),
         mean_tension (1/L) int N."""
         dom = dx.ufl_domain()
         k = self._t(dom)
         th = x["theta"]
         theta = self.temperature(x["C"], x["eta"], dom)
-        return {"entropy": x["eta"] * dx,
+        return {"entropy": x["eta"] * dx, "heat_supplied": heat_supplied(x, dx),
                 "mean_temperature": theta / length * dx,
                 "entropy_production": k["kappa"] * (th.dx(0) / th) ** 2 * dx,
                 "temperature_left": theta * ds(ENDS["left"]), "temperature_right": theta * ds(ENDS["right"]),
