@@ -106,3 +106,43 @@ def assert_same_history(a, b, rtol, skip=()):
         if col not in skip:
             scale = max(np.max(np.abs(a[col])), 1.0)
             assert np.max(np.abs(a[col] - b[col])) <= rtol * scale, col
+
+
+def script_on_ranks(script, ranks=(1, 2), timeout=600):
+    """Run the Python `script` under `mpirun -n N` for each N in `ranks` (inside `timeout`); each run
+    must succeed and print a JSON row as its last line: the rows, in the order of `ranks`."""
+    rows = []
+    for n in ranks:
+        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(n),
+               sys.executable, "-c", script]
+        env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
+        p = subprocess.run(["timeout", str(timeout), *cmd], capture_output=True, text=True, env=env, cwd=REPO,
+                           timeout=timeout + 30)
+        assert p.returncode == 0, p.stderr[-2000:]
+        rows.append(json.loads(p.stdout.strip().splitlines()[-1]))
+    return rows
+
+
+def assert_same_rows(serial, parallel):
+    """Two JSON rows (script_on_ranks) with the same keys and values to 1e-9 (absolute 1e-12)."""
+    import pytest
+    assert serial.keys() == parallel.keys()
+    for key, value in serial.items():
+        assert parallel[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+
+
+class tight_newton:
+    """Newton to |F| <= atol (PETSc options of the rodfem_ SNES): the balance error left is
+    round-off, not the solver tolerance."""
+
+    def __init__(self, atol=1e-13):
+        self.atol = atol
+
+    def __enter__(self):
+        from petsc4py import PETSc
+        self.opts = PETSc.Options()
+        self.opts["rodfem_snes_atol"], self.opts["rodfem_snes_rtol"] = self.atol, 1e-15
+
+    def __exit__(self, *exc):
+        self.opts.delValue("rodfem_snes_atol")
+        self.opts.delValue("rodfem_snes_rtol")

@@ -1,15 +1,10 @@
 """The step interface (rodfem/app/simulator.py): a user's loop through `Simulator.step` against the
 built-in time loop and the built-in controller, save/restore, reset, bad input, mpirun."""
-import json
-import os
-import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import REPO, environment
+from processes import assert_same_rows, script_on_ranks
 
 from rodfem import NewtonFailure, ParameterError, Simulator, run
 from rodfem.app.scene import load
@@ -185,15 +180,5 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.mpi
 def test_two_ranks_equal_serial():
     """The same user loop under mpirun -n 2 (rank 0 gives the inputs): the serial outputs."""
-    rows = []
-    for np_ in (1, 2):
-        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(np_),
-               sys.executable, "-c", SCRIPT]
-        env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
-        p = subprocess.run(["timeout", "300", *cmd], capture_output=True, text=True, env=env, cwd=REPO, timeout=330)
-        assert p.returncode == 0, p.stderr[-2000:]
-        rows.append(json.loads(p.stdout.strip().splitlines()[-1]))
-    serial, parallel = rows
-    assert serial.keys() == parallel.keys()
-    for key, value in serial.items():
-        assert parallel[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+    serial, parallel = script_on_ranks(SCRIPT, timeout=300)
+    assert_same_rows(serial, parallel)

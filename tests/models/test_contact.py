@@ -6,14 +6,10 @@ rolling rod's kinetic energies against the analytic rolling and sliding solution
 the discrete-gradient balance with contact and friction to round-off (planes and the nonlinear gap of
 a sphere, points and distributed contact), the midpoint rule's nonzero balance error, the friction
 work >= 0 every step, the contact forces as history columns, mpirun -n 2 = serial."""
-import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-from processes import REPO, environment
+from processes import assert_same_rows, script_on_ranks
 from scipy.optimize import brentq
 
 from rodfem import Load, Problem, System, ground, run
@@ -228,16 +224,5 @@ if MPI.COMM_WORLD.rank == 0:
 def test_rolling_rod_in_parallel_equals_serial():
     """The rolling rod (4 elements over 2 ranks, the contact's penetration a MAX over the ranks) under
     mpirun -n 2 writes the serial history."""
-    import shutil
-    rows = []
-    for np_ in (1, 2):
-        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(np_),
-               sys.executable, "-c", SCRIPT]
-        env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
-        p = subprocess.run(["timeout", "600", *cmd], capture_output=True, text=True, env=env, cwd=REPO, timeout=630)
-        assert p.returncode == 0, p.stderr[-2000:]
-        rows.append(json.loads(p.stdout.strip().splitlines()[-1]))
-    serial, parallel = rows
-    assert serial.keys() == parallel.keys()
-    for key, value in serial.items():
-        assert parallel[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+    serial, parallel = script_on_ranks(SCRIPT, timeout=600)
+    assert_same_rows(serial, parallel)

@@ -22,7 +22,7 @@ exact one to O((h omega)^2) (here h omega <= 0.11, well below the 1 % tolerance)
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import serial_and_parallel
+from processes import serial_and_parallel, tight_newton
 
 from rodfem import Load, Problem, Support, run
 from rodfem.analysis.linearize import Linearization, natural_modes
@@ -36,22 +36,6 @@ from rodfem.forms.string_materials import logarithmic
 
 RULES = ("midpoint", "discrete-gradient")
 C_N, C_M = (1e-4, 1e-4, 1e-4), (0.2, 0.1, 0.1)      # the 3D test rod: slender (EA = GA = 1e4, EI = 10)
-
-
-class tight_newton:
-    """Newton to |F| <= atol: the balance error left is round-off, not the solver tolerance."""
-
-    def __init__(self, atol=1e-13):
-        self.atol = atol
-
-    def __enter__(self):
-        from petsc4py import PETSc
-        self.opts = PETSc.Options()
-        self.opts["rodfem_snes_atol"], self.opts["rodfem_snes_rtol"] = self.atol, 1e-15
-
-    def __exit__(self, *exc):
-        self.opts.delValue("rodfem_snes_atol")
-        self.opts.delValue("rodfem_snes_rtol")
 
 
 def pulse(value, until):

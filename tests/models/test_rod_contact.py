@@ -6,16 +6,11 @@ error shrinking with the stiffness); a rod lying across two clamped rods (static
 its weight, split by the lever law); a hairpin whose legs swing into each other (self-contact: they stop,
 penetrating less than the energy allows, and pass through each other without the contact); bad input;
 mpirun -n 2 = serial."""
-import json
-import os
-import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import REPO, environment
+from processes import script_on_ranks
 
 from rodfem import Load, Support, System, ground, run
 from rodfem.analysis.statics import solve
@@ -367,15 +362,7 @@ if MPI.COMM_WORLD.rank == 0:
 def test_rod_collision_in_parallel_equals_serial():
     """The collision (8 elements per rod over 2 ranks: the centrelines gathered on rank 0, the forces added to
     the owners' rows) under mpirun -n 2 writes the serial history; the contact is on at the end."""
-    rows = []
-    for np_ in (1, 2):
-        cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(np_),
-               sys.executable, "-c", SCRIPT]
-        env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
-        p = subprocess.run(["timeout", "600", *cmd], capture_output=True, text=True, env=env, cwd=REPO, timeout=630)
-        assert p.returncode == 0, p.stderr[-2000:]
-        rows.append(json.loads(p.stdout.strip().splitlines()[-1]))
-    serial, parallel = rows
+    serial, parallel = script_on_ranks(SCRIPT, timeout=600)
     assert serial["touch.N"] > 0
     assert serial.keys() == parallel.keys()
     for key, value in serial.items():

@@ -4,7 +4,7 @@ the limits tau -> inf / tau -> 0 / zero stiffness, roll-up creep, stiff dashpots
 
 import numpy as np
 import pytest
-from processes import serial_and_parallel
+from processes import serial_and_parallel, tight_newton
 
 from rodfem import Load, Problem, Support, run
 from rodfem.app.driver import run_scene
@@ -99,23 +99,6 @@ def cases():
 # errors are the solver tolerance instead: <= 2e-11 max |H| in these cases.)
 MEASURED = {"planar-hooke": 3.5e-16, "string-kirchhoff": 6.3e-16, "rod-extensible": 1.9e-14,
             "planar-log-axial": 9.6e-16, "string-logarithmic": 5.2e-16, "rod-inextensible": 1.5e-15}
-
-
-class tight_newton:
-    """Newton to |F| <= atol (the user's -rodfem_* options win over rodfem's defaults, 1e-10): what
-    is left of the balance error is then round-off, not the solver tolerance."""
-
-    def __init__(self, atol=1e-13):
-        self.atol = atol
-
-    def __enter__(self):
-        from petsc4py import PETSc
-        self.opts = PETSc.Options()
-        self.opts["rodfem_snes_atol"], self.opts["rodfem_snes_rtol"] = self.atol, 1e-15
-
-    def __exit__(self, *exc):
-        self.opts.delValue("rodfem_snes_atol")
-        self.opts.delValue("rodfem_snes_rtol")
 
 
 @pytest.mark.parametrize("name,integrator,runner", cases(), ids=[f"{c[0]}-{c[1]}" for c in cases()])
