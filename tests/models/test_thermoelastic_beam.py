@@ -154,8 +154,10 @@ def test_dashpot_work_becomes_heat(kind):
             "v": lambda x: np.vstack([0.3 * np.sin(np.pi * x[0]), 2 * np.sin(np.pi * x[0])])}
     sup = [Support("left", "clamped"), Support("right", "pinned")]
     tight = {"snes_atol": 1e-13}
+    # the plain beam to 1e-12: on DOLFINx 0.9 its Kelvin-Voigt residual stalls just above 1e-13, and the
+    # sub-steps that follow would change its time steps (not its physics)
     plain = run(Problem(PlanarBeam(1.0, 0.01, W, **extra), 1.0, 12, initial=init, supports=sup,
-                        integrator="discrete-gradient", newton_options=tight), 0.01, 0.3)
+                        integrator="discrete-gradient", newton_options={"snes_atol": 1e-12}), 0.01, 0.3)
     model = ThermoelasticBeam(1.0, 0.01, W, alpha=0.0, c=2.0, kappa_th=0.5, theta0=THETA0, **extra)
     thermo = run(Problem(model, 1.0, 12, initial=init, supports=sup, integrator="discrete-gradient",
                          newton_options=tight), 0.01, 0.3)
