@@ -346,7 +346,8 @@ MUTATIONS = [
       ["tests/io/test_output.py::test_section_caps_face_outwards_and_carry_their_end_values"],
       "the section surface's start cap wound the other way (its normal facing into the rod)"),
     M("section-caps-swapped", "rodfem/io/frames.py",
-      [("order = np.concatenate([[seg[0]], order, [seg[-1]]])", "order = np.concatenate([[seg[-1]], order, [seg[0]]])")],
+      [("order = np.concatenate([[seg[0]] * cap, order, [seg[-1]] * cap])",
+        "order = np.concatenate([[seg[-1]] * cap, order, [seg[0]] * cap])")],
       ["tests/io/test_output.py::test_section_caps_face_outwards_and_carry_their_end_values"],
       "each cap of the section surface carries the other end's values"),
     # -- joints between moving bodies (issue 22) --
