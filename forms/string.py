@@ -168,13 +168,17 @@ class String:
         terms = [c["m_" + end] * density * ds(ENDS[end]) for end, m in self.end_masses.items() if m > 0]
         return sum(terms[1:], terms[0]) if terms else None
 
-    def hamiltonian(self, x, dx, ds):
-        """H = int 1/2 rhoA v.v + W(C) ds + 1/2 m |v|^2 at the ends."""
-        dom = dx.ufl_domain()
+    def stored(self, x, dom):
+        """The stored energy per length: W(C) and the Maxwell branches' springs W_k(C_k)."""
         W = self.W(x["C"], dom)
         for k, b in enumerate(self.branches, 1):
             W = W + b.spring(x[f"C_{k}"])
-        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + W) * dx
+        return W
+
+    def hamiltonian(self, x, dx, ds):
+        """H = int 1/2 rhoA v.v + W(C) ds + 1/2 m |v|^2 at the ends (W: `stored`)."""
+        dom = dx.ufl_domain()
+        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + self.stored(x, dom)) * dx
         ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
         return H + ends if ends is not None else H
 

@@ -198,15 +198,13 @@ class ThermoelasticString(String):
         k = self._t(domain)
         return k["beta"] * self.coupling(C) + k["c"] * ufl.ln(theta / k["theta0"])
 
-    def hamiltonian(self, x, dx, ds):
-        """H = int 1/2 rhoA v.v + e(C, eta) ds (+ end masses): the total energy."""
-        dom = dx.ufl_domain()
+    def stored(self, x, dom):
+        """The internal energy per length e(C, eta) and the Maxwell branches' springs: with the kinetic
+        energy (String.hamiltonian) the total energy H."""
         e = self.internal_energy(x["C"], x["eta"], dom)
         for k, b in enumerate(self.branches, 1):
             e = e + b.spring(x[f"C_{k}"])
-        H = (0.5 * self.constants(dom)["rhoA"] * ufl.inner(x["v"], x["v"]) + e) * dx
-        ends = self._lumped(ds, 0.5 * ufl.inner(x["v"], x["v"]))
-        return H + ends if ends is not None else H
+        return e
 
     # -- the step ------------------------------------------------------------------
     def residual(self, step, test, dx, ds):
