@@ -34,6 +34,7 @@ from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
+from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
@@ -78,6 +79,7 @@ class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
     batch = True   # the default: bodies of the same compiled forms assembled together (serial)
+    share = True   # the default: bodies of one kind share their mesh and compiled forms (rodfem/core/kinds.py)
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
                  momentum: Optional[bool] = None, batch: Optional[bool] = None):
@@ -114,7 +116,10 @@ class System:
         if self._ready:
             raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
                                   "add every body before the first run")
-        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts)
+        if not hasattr(self, "_meshes"):
+            self._meshes = Meshes() if self.share else None
+        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts,
+                    shared=self._meshes)
         ref = BodyRef(name, body)
         self.bodies[name] = ref
         return ref
@@ -218,30 +223,32 @@ class System:
         # maps when unsupported, its ports' columns); a System's bodies their total momentum maps,
         # and the system its markers, joints and recorders
         self.single = not self.named_bodies
-        forms = {}
-        for ref in refs:
-            for key, f in ref.body.forms().items():
-                if not key.startswith("obs:") or self.single:
-                    forms[(ref.name, key)] = f
         free = not any(r.body.supports for r in refs) and not any(
             j.a.body is None or j.b.body is None for j in self.joints + self.components)
-        if not self.single and (self.momentum or (self.momentum is None and free)):   # total momentum maps
-            for ref in refs:
-                X1 = ref.body.space.split(ref.body.x1)
-                for k, f in ref.body.momentum_forms(X1).items():
-                    forms[(ref.name, "obs:" + k)] = f
-        if not self.single:   # the interactions' columns, body by body
-            for ref in refs:
-                X1 = ref.body.space.split(ref.body.x1)
-                for k, f in ref.body.interaction_forms(X1).items():
-                    forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
+        momentum = not self.single and (self.momentum or (self.momentum is None and free))
+        templates = self._templates(refs)   # body name -> the first body of its kind (rodfem/core/kinds.py)
+        forms = self._forms([r for r in refs if r.name not in templates], momentum)
+        alone = {t.name for t in templates.values()
+                 if not shareable(t.body, {k: f for (n, k), f in forms.items() if n == t.name})}
+        if alone:   # (a kind whose forms hold objects neither the bodies' nor the model's: body by body)
+            forms.update(self._forms([r for r in refs if templates.get(r.name, r).name in alone
+                                      and r.name in templates], momentum))
+            templates = {n: t for n, t in templates.items() if t.name not in alone}
         size = 0
         for j in self.joints:
             j.offset = size
             size += self._bind(j)
         for c in self.components:
             self._bind_component(c)
-        self.compiled = compile_forms(forms)
+        compiled = compile_forms(forms)
+        keys = {}
+        for n, k in forms:
+            keys.setdefault(n, []).append(k)
+        for name, t in templates.items():   # the other bodies of a kind: the template's kernels on their objects
+            own = {k: forms[(t.name, k)] for k in keys[t.name]}
+            twins = twin_forms(t.body, self.bodies[name].body, own, {k: compiled[(t.name, k)] for k in own})
+            compiled.update({(name, k): f for k, f in twins.items()})
+        self.compiled = {(r.name, k): compiled[(r.name, k)] for r in refs for k in keys[templates.get(r.name, r).name]}
         self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
         self.columns = list(dict.fromkeys(self.columns))
         if not self.single:
@@ -275,6 +282,40 @@ class System:
         self._loads = [load for r in refs for load in r.body.loads]
         self._ready = True
         return self
+
+    def _templates(self, refs):
+        """Body name -> the first body of its kind (rodfem/core/kinds.py), for the bodies whose compiled
+        forms are their template's on their own objects (not a Problem's body, not with `share` False)."""
+        out, first = {}, {}
+        if self.single or not self.share:
+            return out
+        for ref in refs:
+            key = kind(ref.body)
+            if key is None:
+                continue
+            if key not in first:
+                first[key] = ref
+            else:
+                out[ref.name] = first[key]
+        return out
+
+    def _forms(self, refs, momentum):
+        """The UFL forms of the bodies `refs`: {(body name, key): form} (rodfem/core/body.py's `forms`;
+        a System's bodies: their momentum maps if `momentum`, and their interactions' columns)."""
+        forms = {}
+        for ref in refs:
+            for key, f in ref.body.forms().items():
+                if not key.startswith("obs:") or self.single:
+                    forms[(ref.name, key)] = f
+            if self.single:
+                continue
+            X1 = ref.body.space.split(ref.body.x1)
+            if momentum:   # total momentum maps
+                for k, f in ref.body.momentum_forms(X1).items():
+                    forms[(ref.name, "obs:" + k)] = f
+            for k, f in ref.body.interaction_forms(X1).items():   # the interactions' columns, body by body
+                forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
+        return forms
 
     def set_newton_options(self, options: Optional[dict]):
         """A new Newton with these options (the matrix and assembly are kept)."""
@@ -650,22 +691,27 @@ class PointIndex:
         bad = None
         vals = self.values(X0)
         if self.comm.rank == 0:
-            cols = sorted({int(g) for j in self.joints for g in j.v_index if int(g) not in self.fixed})
-            where = {g: k for k, g in enumerate(cols)}
-            rows = []
-            for j in self.joints:
+            free = [[int(g) for g in j.v_index if int(g) not in self.fixed] for j in self.joints]
+            blocks = []
+            for j, cols in zip(self.joints, free):
                 G = np.einsum("kij,j->ki", j.Q, vals[j.q_at]) + j.c
-                block = np.zeros((j.size, len(cols)))
-                for k, g in enumerate(j.v_index):
-                    if int(g) in where:
-                        block[:, where[int(g)]] += G[:, k]
-                rows.append(block)
-            G = np.vstack(rows)
-            sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
-            rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
-            if rank < G.shape[0]:
+                blocks.append(G[:, [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]])
+            rank, rows = 0, 0
+            for members in coupled(free):   # (G is block diagonal over the joints sharing no velocity)
+                cols = sorted({g for m in members for g in free[m]})
+                where = {g: k for k, g in enumerate(cols)}
+                G = np.zeros((sum(self.joints[m].size for m in members), len(cols)))
+                r = 0
+                for m in members:
+                    for k, g in enumerate(free[m]):
+                        G[r:r + self.joints[m].size, where[g]] += blocks[m][:, k]
+                    r += self.joints[m].size
+                sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
+                rank += int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+                rows += G.shape[0]
+            if rank < rows:
                 names = ", ".join(j.name for j in self.joints)
-                bad = (f"the joints ({names}) impose {G.shape[0]} conditions of which only {rank} are "
+                bad = (f"the joints ({names}) impose {rows} conditions of which only {rank} are "
                        "independent (a redundant or inconsistent set, e.g. a joint at a supported end): "
                        "remove the redundant ones")
         bad = self.comm.bcast(bad, root=0)
@@ -695,6 +741,29 @@ class PointIndex:
                 for c, value in zip("xyz", x):
                     obs[f"{name}_{c}"] = float(value)
         return self.comm.bcast(obs, root=0)
+
+
+def coupled(columns):
+    """The groups of items that share columns, directly or through others (the connected components of
+    the graph item - column; `columns[i]`: the columns of item i), each a sorted list of items."""
+    parent = list(range(len(columns)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    owner = {}
+    for i, cols in enumerate(columns):
+        for g in cols:
+            if g in owner:
+                parent[root(i)] = root(owner[g])
+            else:
+                owner[g] = i
+    groups = {}
+    for i in range(len(columns)):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
 
 
 class Couplings:

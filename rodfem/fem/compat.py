@@ -153,6 +153,29 @@ def form(f):
     return fem.form(f)
 
 
+def form_twin(compiled, ufl_form, swap, mesh):
+    """The compiled form `compiled` (of the UFL form `ufl_form`) on other objects: each coefficient,
+    constant, argument space and subdomain tag o of `ufl_form` replaced by swap.get(id(o), o), on
+    `mesh`.  The same kernels (no UFL, no JIT): for a form equal to `ufl_form` up to those names."""
+    import cffi
+    from dolfinx import cpp
+
+    def to(o):
+        return swap.get(id(o), o)
+    ufcx = compiled.ufcx_form
+    original = ufl_form.coefficients()
+    coefficients = [to(original[ufcx.original_coefficient_position[i]])._cpp_object
+                    for i in range(ufcx.num_coefficients)]
+    constants = [to(c)._cpp_object for c in ufl_form.constants()]
+    spaces = [to(a.ufl_function_space())._cpp_object for a in ufl_form.arguments()]
+    data, = list(ufl_form.subdomain_data().values())
+    kinds = {"cell": cpp.fem.IntegralType.cell, "exterior_facet": cpp.fem.IntegralType.exterior_facet,
+             "interior_facet": cpp.fem.IntegralType.interior_facet, "vertex": cpp.fem.IntegralType.vertex}
+    subdomains = {t: to(data.get(name)) for name, t in kinds.items()}
+    return type(compiled)(ufcx, spaces, coefficients, constants, subdomains, mesh.ufl_domain().ufl_cargo(), cffi.FFI(),
+                          compiled.code)
+
+
 def create_vector(compiled_form):
     from dolfinx.fem import petsc
     first = next(iter(inspect.signature(petsc.create_vector).parameters))
