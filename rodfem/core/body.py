@@ -68,6 +68,7 @@ class Body:
         if shared is None:
             from rodfem.core.kinds import Meshes
             shared = Meshes()
+        self.shared = shared
         self.mesh, self.facets, self.end_tags = shared.mesh(comm, self.n_elements, self.length)
         self.comm = self.mesh.comm
         self.space = S = shared.space(self.mesh, RigidSpace if self.rigid else StateSpace, model.fields)
@@ -161,13 +162,11 @@ class Body:
         for name, value in initial.items():
             if not isinstance(value, ufl.core.expr.Expr):
                 S.assign(self.x0, name, value)
-        X0 = S.split(self.x0)
         for name, value in initial.items():
             if isinstance(value, ufl.core.expr.Expr):
                 S.assign(self.x0, name, value)
-        for name, expr in self.model.compatible_strains(X0).items():
-            if name not in initial:
-                S.assign(self.x0, name, expr)
+        for name, expr in self.shared.strains(self, initial):
+            S.assign(self.x0, name, expr)
         self.x1.x.array[:] = self.x0.x.array
         self.state0.x.array[:] = self.x0.x.array
 

@@ -27,7 +27,7 @@ class Meshes:
     """The interval meshes and state spaces of a system's bodies, one per (cells, length) and fields."""
 
     def __init__(self):
-        self._meshes, self._spaces = {}, {}
+        self._meshes, self._spaces, self._strains = {}, {}, {}
 
     def mesh(self, comm, n_elements, length):
         """(mesh of [0, length] with n_elements cells, its end vertices {'left', 'right'}, their tags)."""
@@ -46,6 +46,29 @@ class Meshes:
         if key not in self._spaces:
             self._spaces[key] = (mesh, cls(mesh, fields))   # (the mesh kept: its id stays its own)
         return self._spaces[key][1]
+
+
+    def strains(self, body, initial):
+        """[(field, compiled expression on body.x0)] of the model's compatible strains not in `initial`:
+        compiled for the first body of a model and space, the same
+        kernels on their own x_n for the others (when the strains read nothing but x_n and the model's
+        constants)."""
+        from rodfem.fem import compat
+        key = (id(body.model), id(body.space), frozenset(initial))
+        if key in self._strains:
+            x0, exprs = self._strains[key]
+            swap = {id(x0): body.x0}
+            return [(n, compat.expression_twin(e, swap, body.mesh)) for n, e in exprs]
+        X0 = body.space.split(body.x0)
+        exprs = [(n, body.space.expression(n, e)) for n, e in body.model.compatible_strains(X0).items()
+                 if n not in initial]
+        model = _owned(body.model)
+        import ufl
+        if all({id(c) for c in ufl.algorithms.extract_coefficients(e._ufl_expression)} <= {id(body.x0)} and
+               all(id(c) in model for c in ufl.algorithms.analysis.extract_constants(e._ufl_expression))
+               for _, e in exprs):
+            self._strains[key] = (body.x0, exprs)
+        return exprs
 
 
 def interval(comm, n_elements, length):

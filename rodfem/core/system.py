@@ -228,8 +228,8 @@ class System:
         momentum = not self.single and (self.momentum or (self.momentum is None and free))
         templates = self._templates(refs)   # body name -> the first body of its kind (rodfem/core/kinds.py)
         forms = self._forms([r for r in refs if r.name not in templates], momentum)
-        alone = {t.name for t in templates.values()
-                 if not shareable(t.body, {k: f for (n, k), f in forms.items() if n == t.name})}
+        kinds = {t.name: t for t in templates.values()}
+        alone = {n for n, t in kinds.items() if not shareable(t.body, {k: f for (m, k), f in forms.items() if m == n})}
         if alone:   # (a kind whose forms hold objects neither the bodies' nor the model's: body by body)
             forms.update(self._forms([r for r in refs if templates.get(r.name, r).name in alone
                                       and r.name in templates], momentum))

@@ -330,20 +330,22 @@ class BlockBatch:
         return (np.concatenate([r for r, _ in out]), np.concatenate([c for _, c in out]))
 
     def attach(self, A):
+        from rodfem.fem.fastassembly import structure
+        shared = structure(A)   # (read once for all the bodies)
         for blk in self.blocks:
-            blk.attach(A)
+            blk.attach(A, shared)
         self.A = A
-        self._structure()
+        self._structure(shared)
 
     def restructure(self):
+        from rodfem.fem.fastassembly import structure
+        shared = structure(self.A)
         for blk in self.blocks:
-            blk.restructure()
-        self._structure()
+            blk.restructure(shared)
+        self._structure(shared)
 
-    def _structure(self):
-        from rodfem.fem.fastassembly import _Block
-        from rodfem.fem.petsc_raw import blocks
-        self.diag = _Block(blocks(self.A)[0])
+    def _structure(self, shared):
+        self.diag = shared[0]
         self.bc_diag = np.concatenate([blk.fast.bc_diag for blk in self.blocks])
 
     def set_state(self, X):

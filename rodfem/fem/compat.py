@@ -157,7 +157,6 @@ def form_twin(compiled, ufl_form, swap, mesh):
     """The compiled form `compiled` (of the UFL form `ufl_form`) on other objects: each coefficient,
     constant, argument space and subdomain tag o of `ufl_form` replaced by swap.get(id(o), o), on
     `mesh`.  The same kernels (no UFL, no JIT): for a form equal to `ufl_form` up to those names."""
-    import cffi
     from dolfinx import cpp
 
     def to(o):
@@ -172,8 +171,41 @@ def form_twin(compiled, ufl_form, swap, mesh):
     kinds = {"cell": cpp.fem.IntegralType.cell, "exterior_facet": cpp.fem.IntegralType.exterior_facet,
              "interior_facet": cpp.fem.IntegralType.interior_facet, "vertex": cpp.fem.IntegralType.vertex}
     subdomains = {t: to(data.get(name)) for name, t in kinds.items()}
-    return type(compiled)(ufcx, spaces, coefficients, constants, subdomains, mesh.ufl_domain().ufl_cargo(), cffi.FFI(),
+    return type(compiled)(ufcx, spaces, coefficients, constants, subdomains, mesh.ufl_domain().ufl_cargo(), _ffi(),
                           compiled.code)
+
+
+def _ffi():
+    """One cffi.FFI for the casts of the twins (it parses a type once)."""
+    global _FFI
+    if _FFI is None:
+        import cffi
+        _FFI = cffi.FFI()
+    return _FFI
+
+
+_FFI = None
+
+
+def expression_twin(expression, swap, mesh):
+    """The compiled fem.Expression `expression` with each coefficient and constant o of its UFL replaced
+    by swap.get(id(o), o), on `mesh`: the same kernel (no JIT), for the expression equal to it up to those names."""
+    import copy
+
+    from dolfinx import cpp
+
+    def to(o):
+        return swap.get(id(o), o)
+    ufcx, expr = expression._ufcx_expression, expression._ufl_expression
+    original = ufl.algorithms.extract_coefficients(expr)
+    coefficients = [to(original[ufcx.original_coefficient_positions[i]])._cpp_object
+                    for i in range(ufcx.num_coefficients)]
+    constants = [to(c)._cpp_object for c in ufl.algorithms.analysis.extract_constants(expr)]
+    twin = copy.copy(expression)
+    twin._cpp_object = cpp.fem.create_expression_float64(_ffi().cast("uintptr_t", _ffi().addressof(ufcx)), coefficients,
+                                                         constants, mesh.ufl_domain().ufl_cargo(),
+                                                         expression.argument_function_space)
+    return twin
 
 
 def create_vector(compiled_form):
