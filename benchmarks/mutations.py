@@ -55,6 +55,7 @@ CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
+KINDS = "tests/core/test_kinds.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -953,6 +954,19 @@ MUTATIONS = [
       [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
+    # -- bodies of one kind sharing mesh and kernels (rodfem/core/kinds.py) ---------------------------
+    M("kind-template-load-values", "rodfem/core/kinds.py",
+      [("    pairs += [(a.constant, b.constant) for a, b in zip(template.loads, body.loads)]", "")],
+      [KINDS + "::test_links_of_one_kind_on_different_meshes"],
+      "the other bodies of a kind read the first body's load values"),
+    M("kind-template-iterate", "rodfem/core/kinds.py",
+      [("(template.x1, body.x1), ", "")],
+      [KINDS + "::test_equal_links_share_one_mesh_and_kernels"],
+      "the other bodies of a kind assembled at the first body's x_{n+1}"),
+    M("joint-rank-groups-split", "rodfem/core/system.py",
+      [("                parent[root(i)] = root(owner[g])", "                pass")],
+      [KINDS + "::test_redundant_joint_in_a_long_chain_is_refused"],
+      "the joints' rank check treats joints sharing velocities as independent (a redundant pin passes)"),
 ]
 
 

@@ -512,7 +512,8 @@ class System:
         """The sum over the bodies of the functional `key` at their states x1 (summed in the bodies' order)."""
         X = self._x1_values
         self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
-        return self.comm.allreduce(sum(self._functionals(key).values(X)), op=MPI.SUM)
+        total = sum(self._functionals(key).values(X))
+        return total if self.comm.size == 1 else self.comm.allreduce(total, op=MPI.SUM)
 
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
