@@ -234,6 +234,7 @@ class System:
             forms.update(self._forms([r for r in refs if templates.get(r.name, r).name in alone
                                       and r.name in templates], momentum))
             templates = {n: t for n, t in templates.items() if t.name not in alone}
+        self.kinds = {n: t.name for n, t in templates.items()}   # body -> the body whose compiled forms it shares
         size = 0
         for j in self.joints:
             j.offset = size

@@ -63,6 +63,7 @@ def test_equal_links_share_one_mesh_and_kernels():
     s = a[1]
     bodies = [r.body for r in s.bodies.values()]
     assert len({id(bd.mesh) for bd in bodies}) == 1 and len({id(bd.space) for bd in bodies}) == 1
+    assert s.kinds == {f"b{k}": "b1" for k in range(2, 8)}   # (b0, pinned, is a kind of its own)
     F = [s.compiled[(n, "F")] for n in s.bodies]
     assert len({f.ufcx_form for f in F}) == 1 and F[1].function_spaces[0] is not None
     assert len({id(bd.mesh) for bd in (r.body for r in b[1].bodies.values())}) == 8
@@ -74,6 +75,7 @@ def test_links_of_one_kind_on_different_meshes():
     differ and grow in time (free: momentum columns): the history as built one by one."""
     a, b = shared_and_not(lambda: same_length_chain([2, 3, 5, 3]), 1e-3, 3)
     assert len({id(r.body.mesh) for r in a[1].bodies.values()}) == 3
+    assert a[1].kinds == {"b1": "b0", "b2": "b0", "b3": "b0"} and b[1].kinds == {}
     assert "p_x" in a[0].rows[0]
     assert_identical(a, b)
 
