@@ -32,7 +32,6 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
-from rodfem.common.limits import check_elements
 from rodfem.core.integrators import RULES, Step
 from rodfem.core.ports import ENDS
 from rodfem.core.spaces import StateSpace, dofs_per_element
@@ -59,16 +58,16 @@ class Body:
             if supports:
                 raise ValueError(f"body {name or model}: a rigid body has no ends to support; "
                                  "fix it with a joint to GROUND")
-        self.length = float(length)
-        self.n_elements = 1 if self.rigid else check_elements(n_elements, dofs_per_element(model.fields), comm)
-        self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
-        self.contacts = list(contacts)
-        if integrator not in RULES:
-            raise ValueError(f"integrator must be one of {', '.join(RULES)} (got {integrator!r})")
         if shared is None:
             from rodfem.core.kinds import Meshes
             shared = Meshes()
         self.shared = shared
+        self.length = float(length)
+        self.n_elements = 1 if self.rigid else shared.elements(n_elements, dofs_per_element(model.fields), comm)
+        self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
+        self.contacts = list(contacts)
+        if integrator not in RULES:
+            raise ValueError(f"integrator must be one of {', '.join(RULES)} (got {integrator!r})")
         self.mesh, self.facets, self.end_tags = shared.mesh(comm, self.n_elements, self.length)
         self.comm = self.mesh.comm
         self.space = S = shared.space(self.mesh, RigidSpace if self.rigid else StateSpace, model.fields)

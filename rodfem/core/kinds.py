@@ -27,7 +27,19 @@ class Meshes:
     """The interval meshes and state spaces of a system's bodies, one per (cells, length) and fields."""
 
     def __init__(self):
-        self._meshes, self._spaces, self._strains = {}, {}, {}
+        self._meshes, self._spaces, self._strains, self._elements = {}, {}, {}, {}
+
+    def elements(self, n_elements, dofs_per_element, comm):
+        """rodfem.common.limits.check_elements, once per number of cells (it reads the free memory)."""
+        from rodfem.common.limits import check_elements
+        key = (type(n_elements), n_elements, dofs_per_element)
+        try:
+            hash(key)
+        except TypeError:
+            return check_elements(n_elements, dofs_per_element, comm)
+        if key not in self._elements:
+            self._elements[key] = check_elements(n_elements, dofs_per_element, comm)
+        return self._elements[key]
 
     def mesh(self, comm, n_elements, length):
         """(mesh of [0, length] with n_elements cells, its end vertices {'left', 'right'}, their tags)."""

@@ -46,7 +46,7 @@ class StateSpace:
         self.index = {f.name: i for i, f in enumerate(self.fields)}
         els = [compat.element(f.family, mesh, f.degree, f.shape) for f in self.fields]
         self.V = compat.functionspace(mesh, compat.mixed_element(els))
-        self._collapsed = {}
+        self._collapsed, self._scratch = {}, {}
 
     @property
     def names(self):
@@ -97,16 +97,18 @@ class StateSpace:
         UFL expression (interpolated at the element's points) or one compiled (`expression`).
         """
         Vi, dofs = self.collapse(name)
-        fi = fem.Function(Vi)
+        if name not in self._scratch:   # (a Function of V_i to interpolate into, one per field)
+            self._scratch[name] = fem.Function(Vi)
+        fi = self._scratch[name]
         if isinstance(value, ufl.core.expr.Expr):
             value = self.expression(name, value)
         elif not callable(value) and not isinstance(value, fem.Expression):
             value = self._constant(name, value)
         if isinstance(value, fem.Expression):
-            fi.interpolate(value)
+            compat.interpolate(fi, value)
         else:
             try:
-                fi.interpolate(value)
+                compat.interpolate(fi, value)
             except RuntimeError as e:  # DOLFINx names neither the field nor the shape it wanted
                 want = f"({self.field(name).size}, npoints)" if self.field(name).shape else "(npoints,)"
                 raise InputError(f"initial value of field '{name}': a function of x (shape (3, npoints)) "

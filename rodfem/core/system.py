@@ -199,7 +199,11 @@ class System:
             raise ConstraintError(f"{what} needs at least one body")
 
     def _check_name(self, name):
-        if any(j.name == name for j in self.joints + self.components):
+        names, nj, nc = getattr(self, "_names", (set(), 0, 0))
+        if (nj, nc) != (len(self.joints), len(self.components)):   # (the names of those added since)
+            names.update(j.name for j in self.joints[nj:] + self.components[nc:])
+            self._names = (names, len(self.joints), len(self.components))
+        if name in names:
             raise ConstraintError(f"joint or component name {name!r} is used twice")
 
     def marker(self, name: str, point: Point):
