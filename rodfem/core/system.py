@@ -549,8 +549,10 @@ class System:
     def dissipates(self) -> bool:
         """True if a body (rodfem/core/model.py: `dissipation`) or a component (a damper) dissipates."""
         self.build()
-        return (any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
-                or any(c.dissipative for c in self.components))
+        if not hasattr(self, "_dissipates"):   # (fixed once built)
+            self._dissipates = (any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+                                or any(c.dissipative for c in self.components))
+        return self._dissipates
 
     def dissipated_energy(self) -> float:
         """h d_n of the last step: the sum over the dissipating bodies and dampers."""
