@@ -72,10 +72,12 @@ class Meshes:
             swap = {id(x0): body.x0}
             return [(n, compat.expression_twin(e, swap, body.mesh)) for n, e in exprs]
         X0 = body.space.split(body.x0)
-        exprs = [(n, body.space.expression(n, e)) for n, e in body.model.compatible_strains(X0).items()
-                 if n not in initial]
-        model = _owned(body.model)
         import ufl
+        values = [(n, e) for n, e in body.model.compatible_strains(X0).items() if n not in initial]
+        if not all(isinstance(e, ufl.core.expr.Expr) for _, e in values):   # (callables, numbers: as they are)
+            return values
+        exprs = [(n, body.space.expression(n, e)) for n, e in values]
+        model = _owned(body.model)
         if all({id(c) for c in ufl.algorithms.extract_coefficients(e._ufl_expression)} <= {id(body.x0)} and
                all(id(c) in model for c in ufl.algorithms.analysis.extract_constants(e._ufl_expression))
                for _, e in exprs):
