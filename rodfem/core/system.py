@@ -520,6 +520,15 @@ class System:
         total = sum(self._functionals(key).values(X))
         return total if self.comm.size == 1 else self.comm.allreduce(total, op=MPI.SUM)
 
+    def _sums(self, keys):
+        """{key: _sum(key)} for several functionals: the bodies' states read once, one reduction."""
+        X = self._x1_values
+        self._segments("x1").get(X)
+        totals = [sum(self._functionals(k).values(X)) for k in keys]
+        if self.comm.size > 1 and totals:
+            totals = self.comm.allreduce(np.array(totals), op=MPI.SUM).tolist()
+        return dict(zip(keys, totals))
+
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
         if key not in self._scalar_forms:
@@ -562,12 +571,13 @@ class System:
         """The history's columns of the state x_{n+1}."""
         self.build()
         obs = {}
+        columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
         if self.single:
-            obs.update({k[4:]: self._sum(k) for k in self.columns})
+            obs.update(columns)
         if self.points is not None:
             obs.update(self.points.observe(self.X1))
         if not self.single:
-            obs.update({k[4:]: self._sum(k) for k in self.columns})
+            obs.update(columns)
         if self.body_contacts is not None:
             obs.update(self.body_contacts.observe(self.X1))
         for name, body in self._monitored:   # (the bodies with interactions)
