@@ -44,11 +44,11 @@ def silence(stream):
     os.close(null)
 
 
-def parse_sets(pairs):
+def parse_sets(pairs, option="--set"):
     overrides = {}
     for pair in pairs or []:
         if "=" not in pair:
-            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")
+            raise ParameterError(f"{option} expects NAME=VALUE (got {pair!r})")
         name, value = pair.split("=", 1)
         overrides[name.strip()] = value.strip()
     return overrides
@@ -194,7 +194,8 @@ def cmd_reduce(args):
 def cmd_reduce_nonlinear(args, out):
     """rodfem reduce SCENE --nonlinear: the POD-Galerkin reduced model of the nonlinear scene (issue 29)."""
     from rodfem.app.nonlinear_reduction import run_nonlinear_reduce
-    info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test), orders=args.order, out=out)
+    info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test, "--test"), orders=args.order,
+                                out=out)
     runs = info["runs"]
     say(f"{info['scene']}: nonlinear reduced models ({runs['train']['dofs']} dofs; full model "
         + ", ".join(f"{k} {v['full_ms_per_step']:.3g} ms/step" for k, v in runs.items()) + ")")
@@ -287,8 +288,6 @@ def main(argv=None):
     import signal
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `rodfem list | head`: end quietly, not via PETSc's handler
     args = parser().parse_args(argv)
-    import logging
-    logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
         with interrupts.deferred():
             check_directories(args)
