@@ -960,15 +960,6 @@ MUTATIONS = [
         "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
       [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
       "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
-    M("stability-unverified", "rodfem/la/pencil.py",
-      [("            if eta <= RESIDUAL_TOL and omega <= ROW_TOL:\n                keep.append(pair[0])",
-        "            if True:\n                keep.append(pair[0])")],
-      [STABILITY],
-      "growing eigenvalues kept without their backward-error check (roundoff images of infinite ones)"),
-    M("stability-wrong-reference", "rodfem/analysis/stability.py",
-      [("lin = Linearization(problem, reference=ref, t=t)", "lin = Linearization(problem, t=t)")],
-      [STABILITY],
-      "the linearization about the stress-free reference instead of the equilibrium's (no geometric stiffness)"),
 ]
 
 
