@@ -64,6 +64,7 @@ REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
 TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
+STABILITY = "tests/analysis/test_stability.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -968,6 +969,12 @@ MUTATIONS = [
       [("                parent[root(i)] = root(owner[g])", "                pass")],
       [KINDS + "::test_redundant_joint_in_a_long_chain_is_refused"],
       "the joints' rank check treats joints sharing velocities as independent (a redundant pin passes)"),
+    # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
+    M("stability-sign", "rodfem/la/pencil.py",
+      [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",
+        "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
+      [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
+      "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
 ]
 
 
