@@ -942,16 +942,24 @@ def point_coordinates(point, comm):
         found = comm.allreduce(len(entities), op=MPI.SUM)
         if not found:
             raise ConstraintError(f"point {point.describe()} at s = {point.s:g} is not a node of {point.body.name}")
-    q_dofs, v_dofs, layout = [], [], []
-    for q, v in model.kinematics.items():
-        n = S.field(q).size
-        layout.append((q, n))
-        for name, out in ((q, q_dofs), (v, v_dofs)):
-            sub = S.sub(name)
-            for c in range(n):
-                s = sub.sub(c) if S.field(name).shape else sub
-                dofs = fem.locate_dofs_topological(s, dim, entities)
-                out.append(int(dofs[0]) if len(dofs) else -1)
+    key = (point.where, tuple(model.kinematics.items())) if point.where != "node" else None
+    known = S.__dict__.setdefault("_point_dofs", {})   # (bodies sharing a state space: found once per end)
+    found = known.get(key) if key is not None else None
+    if found is None:
+        q_dofs, v_dofs, layout = [], [], []
+        for q, v in model.kinematics.items():
+            n = S.field(q).size
+            layout.append((q, n))
+            for name, out in ((q, q_dofs), (v, v_dofs)):
+                sub = S.sub(name)
+                for c in range(n):
+                    s = sub.sub(c) if S.field(name).shape else sub
+                    dofs = fem.locate_dofs_topological(s, dim, entities)
+                    out.append(int(dofs[0]) if len(dofs) else -1)
+        found = (q_dofs, v_dofs, layout)
+        if key is not None:
+            known[key] = found
+    q_dofs, v_dofs, layout = found
     pc = PointCoordinates(point, np.array(q_dofs), np.array(v_dofs), layout)
     # q(0) from the owning rank
     nloc = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs
