@@ -82,14 +82,17 @@ class System:
     share = True   # the default: bodies of one kind share their mesh and compiled forms (rodfem/core/kinds.py)
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None, batch: Optional[bool] = None):
+                 momentum: Optional[bool] = None, batch: Optional[bool] = None, share: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts.  batch: bodies of the same compiled forms assembled together
-        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`."""
+        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`.  share: bodies of one
+        kind share their mesh, state space and compiled forms (rodfem/core/kinds.py); None: `System.share`."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
         if batch is not None:
             self.batch = batch
+        if share is not None:
+            self.share = share
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
