@@ -33,10 +33,11 @@ def reaction_ratio(p, result):
 def test_sliding_string_has_the_capstan_ratio(theta, mu, tol):
     """The string sliding over the drum (48 elements; V = 2 cm/s >> eps = 1e-4 m/s): the mean of T2/T1
     (the free spans' tensions) and of the end reactions' ratio over the sliding state equal e^(mu theta)
-    to `tol` (measured +1.9e-3 and +3e-4: the polygon's O(a^2) error) and the discrete polygon's ratio to
-    5e-4; the ratio is steady (its band < 1 %: the undamped ringing was +-3 %); each step's friction work
-    >= 0, the balance to round-off, the penetration below the stated tolerance; the history starts at
-    ratio 1 (the string at rest at T1)."""
+    to `tol` (measured +1.9e-3 and +1.6e-4: the polygon's O(a^2) error) and the discrete polygon's ratio
+    to 5e-4 (measured 1.4e-4 and 1e-6); the ratio is steady (its band < 1 %, measured 0.4 % and 0.7 %:
+    the undamped ringing was +-3 %); each step's friction work >= 0, the balance to round-off (1e-12 of
+    the work supplied, measured 2.5e-13), the penetration below the stated tolerance; the history starts
+    at ratio 1 (the string at rest at T1)."""
     p, result, slide = sliding(theta=theta, mu=mu)
     ratio = result.column("ratio")
     assert ratio[0] == pytest.approx(1.0, abs=1e-9)
@@ -47,15 +48,16 @@ def test_sliding_string_has_the_capstan_ratio(theta, mu, tol):
     assert reaction_ratio(p, result)[slide].mean() == pytest.approx(discrete_ratio(p), rel=5e-4)
     assert np.ptp(ratio[slide]) <= 1e-2 * exact
     assert np.diff(result.column("dissipated")).min() >= 0
-    scale = p["T1"] * exact * p["V"] * p["t_end"]            # the work of the pull
-    assert result.max_balance_error <= 1e-12 * scale
+    # H (1e-3 J) is small against the work that flows through: the bound is relative to the work supplied
+    assert result.max_balance_error <= 1e-12 * np.max(np.abs(result.column("supplied")))
     assert result.column("string.drum.penetration").max() <= p["penetration"] * 1.1
     assert np.all(result.column("slip")[slide] >= 100 * p["eps"])   # slides: slip >> eps
 
 
 def test_regularized_friction_gives_the_regularized_ratio():
     """eps = 1 cm/s against V = 2 cm/s: the friction is mu V / sqrt(V^2 + eps^2) = 0.894 mu, and the ratio
-    e^(0.894 mu theta) = 2.323 (9 % below Euler-Eytelwein's): measured within 2e-3 of it."""
+    e^(0.894 mu theta) = 2.323 (9 % below Euler-Eytelwein's): measured within 2e-3 of it (+1.7e-3, the
+    polygon's error; the discrete polygon's ratio with that coefficient: +1.4e-4)."""
     p, result, slide = sliding(eps=1e-2)
     ratio = result.column("ratio")[slide].mean()
     assert ratio == pytest.approx(regularized_ratio(p), rel=2e-3)
@@ -65,7 +67,7 @@ def test_regularized_friction_gives_the_regularized_ratio():
 
 def test_ratio_converges_at_second_order_in_the_elements():
     """24 and 96 elements (4 times finer): the error of the mean ratio against e^(mu theta) falls by more
-    than 6 (measured 5.3e-3 -> 6.2e-4, order 1.6; the polygon's ratio: order 2)."""
+    than 6 (measured 5.3e-3 -> 6.8e-4, order 1.5; the polygon's ratio alone: order 2)."""
     errors = []
     for n in (24, 96):
         p, result, slide = sliding(n_elements=n)
