@@ -118,3 +118,11 @@ def test_capstan_in_parallel_equals_serial():
     writes the serial history."""
     serial, parallel = script_on_ranks(SCRIPT, timeout=600)
     assert_same_rows(serial, parallel)
+
+
+def test_bad_parameter_cli(rodfem, tmp_path):
+    """`rodfem run capstan` with a wrap angle out of range: exit 2, one line naming the parameter."""
+    out = rodfem("run", "capstan", "--set", "theta=200", "--out", str(tmp_path / "x"))
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "parameter 'theta' must be a number in (0, 180]" in lines[0]

@@ -90,3 +90,11 @@ def test_grasp_in_parallel_equals_serial():
     serial, parallel = script_on_ranks(SCRIPT, timeout=600)
     assert serial["arm.pole.N"] > 0
     assert_same_rows(serial, parallel)
+
+
+def test_bad_parameter_cli(rodfem, tmp_path):
+    """`rodfem run soft-arm-grasp` with the tendon outside the section: exit 2, one line naming the parameter."""
+    out = rodfem("run", "soft-arm-grasp", "--set", "offset=0.02", "--out", str(tmp_path / "x"))
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "parameter 'offset' must be in (0, radius = 0.01)" in lines[0]
