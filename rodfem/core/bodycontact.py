@@ -66,11 +66,21 @@ FD_STEP = 1e-7      # Newton's matrix: central differences with steps FD_STEP R
 RIGID_BELOW = 1e-6  # |P dX| <= RIGID_BELOW R: no correction (see the module docstring)
 
 
-def close_pairs(centres, radii):
+def close_pairs(centres, radii, others=None, other_radii=None):
     """All pairs (i, j), i < j, of spheres (centres (n, 3), radii (n,)) that overlap: |c_i - c_j| <= r_i + r_j
-    (cKDTree.query_pairs within 2 max r, then the exact test).  Returns an array (m, 2)."""
+    (cKDTree.query_pairs within 2 max r, then the exact test); with `others` (and their radii), the
+    pairs (i of centres, j of others) that overlap (two trees: no pair within one set is visited).
+    Returns an array (m, 2)."""
+    none = np.zeros((0, 2), dtype=np.int64)
+    if others is not None:
+        if not len(centres) or not len(others):
+            return none
+        reach = float(np.max(radii)) + float(np.max(other_radii))
+        pairs = cKDTree(centres).sparse_distance_matrix(cKDTree(others), reach, output_type="ndarray")
+        keep = pairs["v"] <= radii[pairs["i"]] + other_radii[pairs["j"]]
+        return np.column_stack([pairs["i"][keep], pairs["j"][keep]]).astype(np.int64)
     if len(centres) < 2:
-        return np.zeros((0, 2), dtype=np.int64)
+        return none
     tree = cKDTree(centres)
     pairs = tree.query_pairs(2.0 * float(np.max(radii)), output_type="ndarray")
     if len(pairs):
@@ -152,11 +162,8 @@ class Pairing:
             sep = s[pairs[:, 1]] - s[pairs[:, 0] + 1]   # arc length between the segments (i < j)
             return pairs[(sep >= self.law.exclude) & (pairs[:, 1] > pairs[:, 0] + 1)]
         cb, rad_b = segment_spheres(*[nodes_b[k] for k in configurations], grow=rb)
-        na = len(ca)
-        pairs = close_pairs(np.vstack([ca, cb]), np.concatenate([rad_a, rad_b]))
-        pairs = pairs[(pairs[:, 0] < na) & (pairs[:, 1] >= na)]
-        pairs[:, 1] -= na
-        return pairs
+        pairs = close_pairs(ca, rad_a, cb, rad_b)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
     def stack(self, nodes_a, nodes_b, pairs):
         """The pairs' node positions (m, 4, 3): x_i, x_{i+1}, y_j, y_{j+1}."""
@@ -399,7 +406,8 @@ class BodyContacts:
         start = time.process_time()
         for p, pairs, X0, X1, w, V in self._terms:
             rows = self._free(p.indices(pairs, "v").reshape(-1, 12))
-            parts = [(self._free(p.indices(pairs, "q").reshape(-1, 12)), w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule))]
+            blocks = w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule)
+            parts = [(self._free(p.indices(pairs, "q").reshape(-1, 12)), blocks)]
             if V is not None:
                 dq, dv = p.friction_jacobian(X0, X1, *V, w, self.rule)
                 parts[0] = (parts[0][0], parts[0][1] - dq)

@@ -71,12 +71,16 @@ class BlockLayout:
             owner = self.owner(key // N)
             key = np.concatenate(self.comm.alltoall([key[owner == p] for p in range(self.comm.size)]))
         diagonal = self.start + np.arange(self.size_local, dtype=np.int64)
-        present = [diagonal * N + diagonal]
-        if A is not None:
+        if A is None:
+            key = np.unique(np.concatenate([key, diagonal * N + diagonal]))
+        else:   # A's keys are sorted (CSR: rows in order, columns sorted in each): merge the missing ones in
             indptr, cols, _ = A.getValuesCSR()
             rows = self.start + np.repeat(np.arange(len(indptr) - 1, dtype=np.int64), np.diff(indptr))
-            present.append(rows * N + np.asarray(cols, np.int64))
-        key = np.unique(np.concatenate([key] + present))
+            present = rows * N + np.asarray(cols, np.int64)
+            key = np.unique(key)
+            at = np.searchsorted(present, key)
+            missing = (at >= len(present)) | (present[np.minimum(at, len(present) - 1)] != key)
+            key = np.insert(present, at[missing], key[missing])
         rows, cols = np.divmod(key, N)
         indptr = np.concatenate([[0], np.cumsum(np.bincount(rows - self.start, minlength=self.size_local))])
         return indptr.astype(PETSc.IntType), cols.astype(PETSc.IntType)

@@ -10,11 +10,11 @@ pattern grown entry by entry; bad input; mpirun -n 2 = serial."""
 import numpy as np
 import pytest
 from mpi4py import MPI
-from scipy.optimize import brentq
 from processes import assert_same_rows, script_on_ranks
+from scipy.optimize import brentq
 
 from rodfem import Load, Support, System, run
-from rodfem.core.bodycontact import BodyContacts
+from rodfem.core.bodycontact import BodyContacts, close_pairs
 from rodfem.demos.rod_collision import scene, straight
 from rodfem.errors import InputError
 from rodfem.forms import cosserat_rod
@@ -31,9 +31,9 @@ def column(result, name):
 
 def rod_model(E, r=R_TUBE, rho=RHO):
     A, Isec = np.pi * r**2, np.pi * r**4 / 4
-    G_ = E / 3
-    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec),
-                                    [1 / (E * A), 1 / (G_ * A), 1 / (G_ * A)], [1 / (G_ * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
+    Gs = E / 3
+    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec), [1 / (E * A), 1 / (Gs * A), 1 / (Gs * A)],
+                                    [1 / (Gs * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
 
 
 def block_on_rod(v0=0.0, pull=0.0, friction=FRICTION, La=0.1):
@@ -70,6 +70,8 @@ def test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block():
     assert slope == pytest.approx(-mu * G, rel=1.5e-2)
     assert x[-1] - x[0] == pytest.approx(v0**2 / (2 * mu * G), rel=1e-2)
     assert np.abs(v[tm > 0.03]).max() < 3 * FRICTION.eps
+    its = column(result, "newton_its")[1:]   # the friction's derivatives in Newton's matrix: few iterations,
+    assert its[sliding].max() <= 4 and its.sum() <= 200   # more (<= 12) where the slip meets eps: 165 in all
     lost = np.diff(column(result, "dissipated"))
     assert lost.min() >= 0 and lost.sum() > 0.9 * 0.5 * m * v0**2
     assert result.max_balance_error <= 1e-12 * 0.5 * m * v0**2
@@ -104,9 +106,11 @@ def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
     assert result.max_balance_error <= 1e-12 * max(np.abs(column(result, "H")).max(), 1e-12)
 
 
-def rub(**over):
+def rub(system=False, **over):
     p = scene.values({"mu": 0.3, "slide": 0.1, "offset_a": 0.1, "offset_b": 0.05, "t_end": 0.03, "dt": 1e-3, **over})
-    return p, run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
+    s = scene.build(p, MPI.COMM_WORLD)
+    result = run(s, p["dt"], p["t_end"])
+    return (p, result, s) if system else (p, result)
 
 
 @pytest.mark.parametrize("rule", ["discrete-gradient", "midpoint"])
@@ -135,13 +139,27 @@ def test_two_free_rods_rubbing_keep_momentum_and_the_balance(rule):
 
 def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
     """The contact's entries added to the matrix pattern in one re-preallocation (`grow`) against PETSc
-    inserting them as new nonzeros: the same history to the solver's tolerance (rubbing rods, 6 elements)."""
-    _, grown = rub(n_elements=6, t_end=0.02)
+    inserting them as new nonzeros: the same history to the solver's tolerance (rubbing rods, 6 elements);
+    with the pattern grown PETSc never reallocates (MatGetInfo's mallocs: 0), without it does."""
+    _, grown, s = rub(system=True, n_elements=6, t_end=0.02)
+    assert s.assembler.A.getInfo()["mallocs"] == 0
     monkeypatch.setattr(BodyContacts, "grow", lambda self: None)
-    _, inserted = rub(n_elements=6, t_end=0.02)
+    _, inserted, s = rub(system=True, n_elements=6, t_end=0.02)
+    assert s.assembler.A.getInfo()["mallocs"] > 0
     for key in ("H", "dissipated", "L_y", "touch.N", "touch.Ft_x", "pz_a", "pz_b"):
         a, b = column(grown, key), column(inserted, key)
         assert np.abs(a - b).max() <= 1e-9 * max(np.abs(b).max(), 1e-12), key
+
+
+def test_broad_phase_between_two_bodies_finds_every_overlap():
+    """The two bodies' spheres in two k-d trees (no pair within one body visited): exactly the overlapping
+    pairs of a brute force, for spheres of different sizes on the two sides."""
+    rng = np.random.default_rng(3)
+    a, b = rng.random((300, 3)), rng.random((200, 3))
+    ra, rb = 0.01 + 0.01 * rng.random(300), 0.05 + 0.05 * rng.random(200)
+    found = {tuple(p) for p in close_pairs(a, ra, b, rb)}
+    brute = np.linalg.norm(a[:, None] - b[None], axis=2) <= ra[:, None] + rb[None]
+    assert found == set(zip(*np.nonzero(brute))) and len(found) > 50
 
 
 def test_bad_friction_is_refused_in_one_line():
