@@ -86,9 +86,9 @@ def creep(pull, W):
 @pytest.mark.parametrize("pull", [0.5, 1.5], ids=["below-threshold", "above-threshold"])
 def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
     """At rest on the clamped rod, pulled along x by pull mu_s W.  Below the threshold (pull = 0.5) the rod
-    creeps at the regularized law's steady slip (1.17e-4 m/s, eps-level) on average to 5 % (N rings by ~7 %
+    creeps at the regularized law's steady slip (1.17e-4 m/s, eps-level) on average to 2 % (N rings by ~7 %
     about W, the creep is convex in N), never above 2 eps; above it (1.5) the friction drops to mu_k N and
-    the rod accelerates at (1.5 mu_s - mu_k) g to 2 %."""
+    the rod accelerates at (1.5 mu_s - mu_k) g to 1 %."""
     s, m = block_on_rod(pull=pull)
     h = 1e-3
     result = run(s, h, 0.03)
@@ -97,11 +97,11 @@ def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
     late = t >= 0.015
     if pull < 1:
         mean = (x[-1] - x[late][0]) / (t[-1] - t[late][0])
-        assert mean == pytest.approx(creep(pull, m * G), rel=5e-2)
+        assert mean == pytest.approx(creep(pull, m * G), rel=2e-2)
         assert np.abs(v[tm > 0.015]).max() < 2 * FRICTION.eps
     else:
         slope = np.polyfit(tm[tm > 0.015], v[tm > 0.015], 1)[0]
-        assert slope == pytest.approx((pull * FRICTION.mu_s - FRICTION.mu_k) * G, rel=2e-2)
+        assert slope == pytest.approx((pull * FRICTION.mu_s - FRICTION.mu_k) * G, rel=1e-2)
     assert np.diff(column(result, "dissipated")).min() >= 0
     assert result.max_balance_error <= 1e-12 * max(np.abs(column(result, "H")).max(), 1e-12)
 
