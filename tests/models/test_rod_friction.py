@@ -12,6 +12,7 @@ import pytest
 from mpi4py import MPI
 from processes import assert_same_rows, script_on_ranks
 from scipy.optimize import brentq
+from test_rod_contact import hairpin
 
 from rodfem import Load, Support, System, run
 from rodfem.core.bodycontact import BodyContacts, close_pairs
@@ -135,6 +136,22 @@ def test_two_free_rods_rubbing_keep_momentum_and_the_balance(rule):
     assert lost.min() >= 0 and lost.max() > 0
     if rule == "discrete-gradient":
         assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+
+
+def test_self_contact_with_friction_keeps_momentum_and_the_balance():
+    """The hairpin of the self-contact test (one rod whose legs swing into each other) with mu = 0.5 between
+    its legs: the legs touch (and rub as they bend), the linear momentum stays at its initial value to
+    round-off, the friction's work is never positive and H - supplied + dissipated is exact."""
+    s, KE, k = hairpin(contact=False)
+    s.contact(RodContact(k, R_TUBE, friction=Coulomb(0.5)), s.bodies["hairpin"], name="self")
+    result = run(s, 8e-4, 0.064)
+    assert column(result, "self.N").max() > 0
+    for key in ("p_x", "p_y", "p_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14, key
+    assert np.allclose(column(result, "self.Ft_x"), 0.0)   # (self-contact: no force "on body a")
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.max() > 0
+    assert result.max_balance_error <= 1e-12 * KE
 
 
 def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
