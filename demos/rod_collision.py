@@ -174,7 +174,8 @@ scene = Scene("rod-collision", "two elastic rods crossing at right angles collid
               "contact): momentum and energy exact, stiff rods against the rigid-body impulse law",
               parameters, build,
               notes="Total p, L constant to round-off; discrete gradient: H constant to round-off; pz_a, pz_b, "
-                    "Ly_a, Lx_b approach their *_rigid columns as E grows.")
+                    "Ly_a, Lx_b approach their *_rigid columns as E grows.  With mu > 0: p constant, L changes "
+                    "by h touch.Mf per step, H - supplied + dissipated constant to round-off.")
 
 if __name__ == "__main__":
     sys.exit(main(["run", scene.name, *sys.argv[1:]]))
