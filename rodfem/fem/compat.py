@@ -223,9 +223,11 @@ def expression_twin(expression, swap, mesh):
     coefficients = [to(c)._cpp_object for c in expression._rodfem_terminals[0]]
     constants = [to(c)._cpp_object for c in expression._rodfem_terminals[1]]
     twin = copy.copy(expression)
-    twin._cpp_object = cpp.fem.create_expression_float64(_ffi().cast("uintptr_t", _ffi().addressof(ufcx)), coefficients,
-                                                         constants, mesh.ufl_domain().ufl_cargo(),
-                                                         expression.argument_function_space)
+    create = cpp.fem.create_expression_float64
+    on_mesh = ((mesh.ufl_domain().ufl_cargo(),) if "mesh:" in (create.__doc__ or "")
+               else ())   # DOLFINx 0.5 binds the expression to a mesh; 0.9 does not
+    twin._cpp_object = create(_ffi().cast("uintptr_t", _ffi().addressof(ufcx)), coefficients, constants,
+                              *on_mesh, expression.argument_function_space)
     return twin
 
 
