@@ -221,6 +221,7 @@ def test_driven_joint_is_an_input_port():
     assert hub.size == 1
 
 
+@pytest.mark.mpi
 def test_two_point_masses_under_a_domain_load_follow_the_closed_form():
     """Two free 2D point masses (m = 1 and 2, constant initial values) under the domain force
     (0, -9.81) each: the midpoint rule is exact for a constant force, so x, p and L_z = sum m x ^ v

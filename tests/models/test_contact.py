@@ -221,6 +221,7 @@ if MPI.COMM_WORLD.rank == 0:
 """
 
 
+@pytest.mark.mpi
 def test_rolling_rod_in_parallel_equals_serial():
     """The rolling rod (4 elements over 2 ranks, the contact's penetration a MAX over the ranks) under
     mpirun -n 2 writes the serial history."""

@@ -109,6 +109,7 @@ def test_rest_to_rest_profile():
         assert abs(r(t) - r(t - eps)) / eps <= 1e-4
 
 
+@pytest.mark.mpi
 @pytest.mark.parametrize("scene, args", [
     ("robot-arm-control", ["--set", "n_elements=8", "--set", "t_end=0.5", "--set", "frames=2"]),
     ("four-particle", ["--set", "t_end=1.0", "--set", "frames=2"]),
