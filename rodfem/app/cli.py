@@ -195,16 +195,18 @@ def cmd_reduce_nonlinear(args, out):
     """rodfem reduce SCENE --nonlinear: the POD-Galerkin reduced model of the nonlinear scene (issue 29)."""
     from rodfem.app.nonlinear_reduction import run_nonlinear_reduce
     info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test, "--test"), orders=args.order,
-                                out=out)
+                                out=out, hyper=args.hyper, ecsw_tol=args.ecsw_tol)
     runs = info["runs"]
     say(f"{info['scene']}: nonlinear reduced models ({runs['train']['dofs']} dofs; full model "
         + ", ".join(f"{k} {v['full_ms_per_step']:.3g} ms/step" for k, v in runs.items()) + ")")
-    say(f"{'r':>3s} {'unknowns':>8s} {'input':>6s} {'config. error':>13s} {'balance/H':>10s} {'ms/step':>8s} {'speed-up':>8s}")
+    say(f"{'r':>3s} {'unknowns':>8s} {'input':>6s} {'config. error':>13s} {'balance/H':>10s} {'ms/step':>8s} {'speed-up':>8s}"
+        + (f" {'cells':>9s}" if args.hyper == "ecsw" else ""))
     for r, o in info["orders"].items():
+        cells = f" {o['ecsw']['sampled']:4d}/{o['ecsw']['elements']:<4d}" if "ecsw" in o else ""
         for name in runs:
             e = o[name]
             say(f"{r:>3s} {o['reduced_unknowns']:8d} {name:>6s} {e['errors']['configuration']:13.2e} "
-                f"{e['errors']['balance_relative']:10.1e} {e['ms_per_step']:8.3g} {e['speed_up']:8.2f}")
+                f"{e['errors']['balance_relative']:10.1e} {e['ms_per_step']:8.3g} {e['speed_up']:8.2f}{cells}")
     say(f"results in {out}/nonlinear_reduce.json")
 
 
@@ -281,6 +283,12 @@ def add_reduce_parser(sub):
                          "the scene's run (docs/guide/nonlinear-reduction.md)")
     rp.add_argument("--test", action="append", metavar="NAME=VALUE",
                     help="with --nonlinear: a parameter of the test run (another input; repeatable)")
+    rp.add_argument("--hyper", default="ecsw", choices=("ecsw", "none"),
+                    help="with --nonlinear: hyper-reduction, ECSW sampled and weighted cells (default) or none (full-order "
+                         "assembly) (docs/guide/hyper-reduction.md)")
+    rp.add_argument("--ecsw-tol", type=float, default=1e-2, metavar="TOL",
+                    help="with --hyper ecsw: relative residual of the weights' fit to the training contributions, in (0, 1) "
+                         "(default 1e-2)")
     rp.set_defaults(func=cmd_reduce)
 
 

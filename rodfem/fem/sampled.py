@@ -159,6 +159,11 @@ class ReducedState:
         self.c1 = np.where(any_nz, self.k - nz[:, ::-1].argmax(axis=1), 0).astype(np.int32)
         self.projected = np.where(self.bc[D] | ~any_nz, -1, np.arange(len(D))).astype(np.int32)
         self.S = np.zeros(2 * len(D))
+        # the rows by their column block: x_D = x_ref[D] + V[D] xi block by block (a row of V lives in one block)
+        self.blocks = []
+        for a, b in sorted(set(zip(self.c0.tolist(), self.c1.tolist()))):
+            rows = np.flatnonzero((self.c0 == a) & (self.c1 == b))
+            self.blocks.append((rows, a, b, np.ascontiguousarray(self.VD[rows, a:b])))
         self.frozen = True
         for f in self.forms:
             f.bind()
@@ -166,9 +171,13 @@ class ReducedState:
     def set(self, xi1, xi0=None):
         """x_{n+1} (and x_n) on D from the reduced coordinates."""
         n = len(self.dofs)
-        self.S[:n] = self.xD + self.VD @ xi1
-        if xi0 is not None:
-            self.S[n:] = self.xD + self.VD @ xi0
+        for xi, at in ((xi1, 0), (xi0, n)):
+            if xi is None:
+                continue
+            S = self.S[at:at + n]
+            S[:] = self.xD
+            for rows, a, b, M in self.blocks:
+                S[rows] += M @ xi[a:b]
 
 
 class SampledForm:
@@ -256,34 +265,42 @@ class SampledForm:
             if not np.allclose(mine, theirs, rtol=1e-12, atol=1e-12 * max(1.0, np.abs(theirs).max(initial=0.0))):
                 raise ValueError("hyper-reduction: the gathered coefficients differ from DOLFINx's packing")
 
-    def evaluate(self, separate=False, consts=None):
+    def _calls(self):
+        """The C call's arguments per integral, but the constants and the output (made once: the arrays stay put)."""
+        st, ffi = self.state, self.mod.ffi
+        buf = ffi.from_buffer
+        self._consts = np.zeros(max(len(np.asarray(compat.pack_constants(self.form))), 1))
+        common = (buf("int32_t[]", self.xdofs), buf("double[]", self.x))
+        calls = []
+        for it in self.integrals:
+            if not len(it["cells"]):
+                continue
+            calls.append((it, (len(it["cells"]), buf("int32_t[]", it["cells"]),
+                               buf("int32_t[]", it["facets"]) if it["facets"] is not None else ffi.NULL,
+                               buf("double[]", it["w"]), it["address"], self.rank, self.nd,
+                               buf("int32_t[]", it["ld"]), self.nx, *common, buf("int64_t[]", it["cidx"]),
+                               it["cstride"], buf("double[]", st.S), buf("double[]", self._consts), st.k,
+                               buf("double[]", st.VD), buf("int32_t[]", st.c0), buf("int32_t[]", st.c1))))
+        return calls
+
+    def evaluate(self, separate=False):
         """The weighted, projected value at the state's last `set` (see the module docstring); `separate`:
-        one row per entity of the cell integrals (the facets' sum is returned as a second value)."""
+        (one row per sampled cell of the cell integrals, the facet integrals' sum)."""
         st, ffi, lib = self.state, self.mod.ffi, self.mod.lib
+        if getattr(self, "_bound", None) is not st.S:
+            self._args, self._bound = self._calls(), st.S
         k = st.k
         shape = () if self.rank == 0 else ((k,) if self.rank == 1 else (k, k))
-        consts = np.ascontiguousarray(compat.pack_constants(self.form) if consts is None else consts, dtype=np.float64)
-        if consts.size == 0:
-            consts = np.zeros(1)
-        total = np.zeros(shape)
+        consts = compat.pack_constants(self.form)
+        self._consts[:len(consts)] = consts
+        total = np.zeros(max(int(np.prod(shape)), 1))
         per_cell = np.zeros((len(self.cells),) + shape) if separate else None
-        buf = ffi.from_buffer
-        for it in self.integrals:
-            sep = separate and it["facets"] is None
-            out = np.zeros(((len(it["cells"]),) + shape) if sep else shape)
-            if len(it["cells"]):
-                lib.rodfem_sampled(len(it["cells"]), buf("int32_t[]", it["cells"]),
-                                   buf("int32_t[]", it["facets"]) if it["facets"] is not None else ffi.NULL,
-                                   buf("double[]", it["w"]), it["address"], self.rank, self.nd,
-                                   buf("int32_t[]", it["ld"]), self.nx, buf("int32_t[]", self.xdofs),
-                                   buf("double[]", self.x), buf("int64_t[]", it["cidx"]), it["cstride"],
-                                   buf("double[]", st.S), buf("double[]", consts), k, buf("double[]", st.VD),
-                                   buf("int32_t[]", st.c0), buf("int32_t[]", st.c1), int(sep),
-                                   buf("double[]", out.reshape(-1)))
-            if sep:
+        for it, args in self._args:
+            if separate and it["facets"] is None:
+                out = np.zeros((len(it["cells"]),) + shape)
+                lib.rodfem_sampled(*args, 1, ffi.from_buffer("double[]", out.reshape(-1)))
                 np.add.at(per_cell, np.searchsorted(self.cells, it["cells"]), out)
             else:
-                total = total + out
-        if separate:
-            return per_cell, (float(total) if self.rank == 0 else total)
-        return float(total) if self.rank == 0 else total
+                lib.rodfem_sampled(*args, 0, ffi.from_buffer("double[]", total))
+        total = float(total[0]) if self.rank == 0 else total.reshape(shape)
+        return (per_cell, total) if separate else total
