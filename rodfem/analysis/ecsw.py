@@ -54,8 +54,8 @@ import scipy.linalg
 
 from rodfem.analysis.galerkin import ATOL, MAX_IT, RTOL, STOL, Basis, ReducedSystem, layout
 from rodfem.errors import NewtonFailure, ParameterError
-from rodfem.nls.newton import Solve
 from rodfem.fem.sampled import ReducedState, SampledForm
+from rodfem.nls.newton import Solve
 
 DEFAULT_TOL = 1e-2        # relative fit residual of the training contributions (benchmarks/nonlinear_reduce.md)
 DEFAULT_SNAPSHOTS = 40    # training states (evenly spread over the training run)

@@ -82,8 +82,8 @@ def run_nonlinear_reduce(scene, overrides=None, test=None, orders=(4, 8, 16), ou
     cases = {"train": p}
     if test:
         _, cases["test"] = resolve(scene, {**(overrides or {}), **test})
-    info = {"scene": scene.name, "hyper": hyper, "parameters": p, "test_parameters": {k: cases["test"][k] for k in test} if test else {},
-            "orders": {}, "runs": {}}
+    info = {"scene": scene.name, "hyper": hyper, "parameters": p,
+            "test_parameters": {k: cases["test"][k] for k in test} if test else {}, "orders": {}, "runs": {}}
     data = {}
     for name, q in cases.items():
         problem = build(scene, q, comm)
