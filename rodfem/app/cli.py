@@ -286,9 +286,9 @@ def add_reduce_parser(sub):
     rp.add_argument("--hyper", default="ecsw", choices=("ecsw", "none"),
                     help="with --nonlinear: hyper-reduction, ECSW sampled and weighted cells (default) or none (full-order "
                          "assembly) (docs/guide/hyper-reduction.md)")
-    rp.add_argument("--ecsw-tol", type=float, default=1e-2, metavar="TOL",
+    rp.add_argument("--ecsw-tol", type=float, default=1e-3, metavar="TOL",
                     help="with --hyper ecsw: relative residual of the weights' fit to the training contributions, in (0, 1) "
-                         "(default 1e-2)")
+                         "(default 1e-3)")
     rp.set_defaults(func=cmd_reduce)
 
 

@@ -108,6 +108,18 @@ void rodfem_sampled(int n, const int32_t* cells, const int32_t* facets, const do
   }
   free(Ae);
 }
+
+/* out[i] = x[i] + sum_{a in [c0[i], c1[i])} VD[i, a] xi[a]: the state on the sampled dofs */
+void rodfem_sampled_state(int n, int k, const double* x, const double* VD, const int32_t* c0, const int32_t* c1,
+                          const double* xi, double* out)
+{
+  for (int i = 0; i < n; ++i) {
+    const double* Vi = VD + (size_t)i * k;
+    double v = x[i];
+    for (int a = c0[i]; a < c1[i]; ++a) v += Vi[a] * xi[a];
+    out[i] = v;
+  }
+}
 """
 
 C_DECL = """
@@ -117,6 +129,8 @@ void rodfem_sampled(int n, const int32_t* cells, const int32_t* facets, const do
                     const int64_t* cidx, int cstride, const double* S, const double* consts,
                     int k, const double* VD, const int32_t* c0, const int32_t* c1,
                     int separate, double* out);
+void rodfem_sampled_state(int n, int k, const double* x, const double* VD, const int32_t* c0, const int32_t* c1,
+                          const double* xi, double* out);
 """
 
 
@@ -129,16 +143,19 @@ class ReducedState:
     """The state x_{n+1} = x_ref + V xi_{n+1} and x_n = x_ref + V xi_n on the dofs D of the sampled entities.
 
     x1, x0: the Functions the forms read as x_{n+1} and x_n; bc_dofs: the Dirichlet dofs (their rows of V are
-    dropped: x = x_ref there).  `dofs` (D) grows as forms are added (`add`), then `freeze()` cuts V[D]."""
+    dropped: x = x_ref there); column_blocks: [(start, end)] of V's column blocks, each row of V nonzero in one of
+    them (default: one block).  `dofs` (D) grows as forms are added (`add`), then `freeze()` cuts V[D]."""
 
-    def __init__(self, V, x_ref, x1, x0, bc_dofs=()):
+    def __init__(self, V, x_ref, x1, x0, bc_dofs=(), column_blocks=None):
         self.V, self.x_ref, self.x1, self.x0 = np.asarray(V), np.asarray(x_ref), x1, x0
         self.k = self.V.shape[1]
+        self.column_blocks = list(column_blocks) if column_blocks else [(0, self.k)]
         self.bc = np.zeros(self.V.shape[0], bool)
         self.bc[np.asarray(bc_dofs, dtype=np.int64)] = True
         self.dofs, self.where = np.zeros(0, np.int64), {}
         self.forms = []
         self.frozen = False
+        self._last = [None, None]
 
     def add(self, dofs):
         assert not self.frozen
@@ -153,31 +170,36 @@ class ReducedState:
         VD[self.bc[D]] = 0.0
         self.VD = np.ascontiguousarray(VD)
         self.xD = np.ascontiguousarray(self.x_ref[D])
-        nz = self.VD != 0.0
-        any_nz = nz.any(axis=1)
-        self.c0 = np.where(any_nz, nz.argmax(axis=1), 0).astype(np.int32)
-        self.c1 = np.where(any_nz, self.k - nz[:, ::-1].argmax(axis=1), 0).astype(np.int32)
-        self.projected = np.where(self.bc[D] | ~any_nz, -1, np.arange(len(D))).astype(np.int32)
+        self.c0 = np.zeros(len(D), np.int32)
+        self.c1 = np.zeros(len(D), np.int32)
+        for a, b in self.column_blocks:
+            inside = np.any(self.VD[:, a:b] != 0.0, axis=1)
+            if np.any(inside & (np.any(self.VD[:, :a] != 0.0, axis=1) | np.any(self.VD[:, b:] != 0.0, axis=1))):
+                raise ValueError("a row of the basis is nonzero in two column blocks")
+            self.c0[inside], self.c1[inside] = a, b
+        self.projected = np.where(self.bc[D] | (self.c1 == 0), -1, np.arange(len(D))).astype(np.int32)
         self.S = np.zeros(2 * len(D))
-        # the rows by their column block: x_D = x_ref[D] + V[D] xi block by block (a row of V lives in one block)
-        self.blocks = []
-        for a, b in sorted(set(zip(self.c0.tolist(), self.c1.tolist()))):
-            rows = np.flatnonzero((self.c0 == a) & (self.c1 == b))
-            self.blocks.append((rows, a, b, np.ascontiguousarray(self.VD[rows, a:b])))
         self.frozen = True
+        self._last = [None, None]
+        self.mod = cbuild.load("rodfem_sampled", C_SOURCE, C_DECL)
+        ffi = self.mod.ffi
+        self._xi = np.zeros(self.k)
+        self._args = (len(D), self.k, ffi.from_buffer("double[]", self.xD), ffi.from_buffer("double[]", self.VD),
+                      ffi.from_buffer("int32_t[]", self.c0), ffi.from_buffer("int32_t[]", self.c1),
+                      ffi.from_buffer("double[]", self._xi))
+        self._out = [ffi.from_buffer("double[]", self.S), ffi.from_buffer("double[]", self.S[len(D):])]
         for f in self.forms:
             f.bind()
 
     def set(self, xi1, xi0=None):
-        """x_{n+1} (and x_n) on D from the reduced coordinates."""
-        n = len(self.dofs)
-        for xi, at in ((xi1, 0), (xi0, n)):
-            if xi is None:
+        """x_{n+1} (and x_n) on D from the reduced coordinates (row by row over the row's column block; a half
+        already at these coordinates is not formed again)."""
+        for half, xi in enumerate((xi1, xi0)):
+            if xi is None or (self._last[half] is not None and np.array_equal(xi, self._last[half])):
                 continue
-            S = self.S[at:at + n]
-            S[:] = self.xD
-            for rows, a, b, M in self.blocks:
-                S[rows] += M @ xi[a:b]
+            self._xi[:] = xi
+            self.mod.lib.rodfem_sampled_state(*self._args, self._out[half])
+            self._last[half] = self._xi.copy()
 
 
 class SampledForm:
