@@ -8,8 +8,8 @@ rodfem/analysis/ecsw.py): the steel strip of cantilever-2d (1 m, EI = 175 N m^2)
 are fields), its tip load fy ramped over 0.2 s to -150 N and held (training: the tip swings about a deflection
 of 0.26 m, a quarter of the length), 500 steps of 1 ms; the test input: fy = -100 N with a horizontal fx = 30 N
 the training never had.  Three meshes (40, 160, 640 elements).  Per order and input: the reduced model without
-hyper-reduction (full-order assembly, projected) and with ECSW (the default tolerance 1e-2; at 640 elements also
-1e-3): the sampled cells, the configuration and tip errors against the full model, the largest energy-balance
+hyper-reduction (full-order assembly, projected) and with ECSW (the default tolerance 1e-3; at 640 elements also
+1e-2): the sampled cells, the configuration and tip errors against the full model, the largest energy-balance
 residual / max H, the wall time per step of the full and reduced time loops, the reduced model's time split,
 the speed-up.
 """
@@ -24,7 +24,7 @@ SETS = {"degree": 2, "fy": -150.0, "t_ramp": 0.2, "t_load": 1.0, "t_end": 0.5, "
 TEST = {"fy": -100.0, "fx": 30.0}
 ORDERS = (4, 8, 16)
 MESHES = (40, 160, 640)
-FINE_TOL = 1e-3   # also at the finest mesh
+OTHER_TOL = 1e-2   # also at the finest mesh: a looser fit
 
 
 def rows_of(info, n, tol, galerkin):
@@ -63,8 +63,8 @@ def main(meshes=MESHES):
         rows += rows_of(info, n, DEFAULT_TOL, galerkin=True)
         if n == max(meshes):
             info = run_nonlinear_reduce("cantilever-2d", {**SETS, "n_elements": n}, test=TEST, orders=ORDERS,
-                                        ecsw_tol=FINE_TOL)
-            rows += rows_of(info, n, FINE_TOL, galerkin=False)
+                                        ecsw_tol=OTHER_TOL)
+            rows += rows_of(info, n, OTHER_TOL, galerkin=False)
     columns = [("elements", "{}"), ("dofs", "{}", "full dofs"), ("r", "{}", "r"), ("unknowns", "{}", "reduced unknowns"),
                ("hyper", "{}", "hyper-reduction"), ("sampled", "{}", "cells assembled"), ("input", "{}"),
                ("config_error", "{:.2e}", "configuration error"), ("tip_y_error", "{:.2e}", "tip_y error"),

@@ -95,6 +95,29 @@ def test_every_cell_with_unit_weights_is_the_galerkin_model(case, hooke):
     assert np.abs(red.column("H") - ref.column("H")).max() <= 1e-9 * ref.column("H").max()
 
 
+def test_sampled_jacobian_is_the_derivative_of_the_sampled_residual(hooke):
+    """With a trained sample (weights not 1), the reduced Jacobian is the derivative of the weighted reduced residual
+    (central differences in every reduced coordinate, to 1e-6)."""
+    cases, lay = hooke
+    problem, res, X, p = cases["train"]
+    basis = pod_basis(X, 3, lay, problem)
+    s = train(problem, basis, X, 3e-2)
+    assert np.ptp(s.weights) > 0.1
+    rom = HyperReducedSystem(problem, basis, s, start=X[:, 0])
+    problem.set_step(p["dt"])
+    problem.set_time(0.05)
+    xi0, xi1 = basis.coordinates(X[:, 30]), basis.coordinates(X[:, 31])
+    rom.rstate.set(xi1, xi0)
+    J = rom.J.evaluate()
+    fd = np.zeros_like(J)
+    for j in range(basis.order):
+        eps = 1e-6 * max(1.0, abs(xi1[j]))
+        for sign in (1, -1):
+            rom.rstate.set(xi1 + sign * eps * np.eye(basis.order)[j])
+            fd[:, j] += sign * rom.F.evaluate() / (2 * eps)
+    assert np.linalg.norm(J - fd) <= 1e-6 * np.linalg.norm(J)
+
+
 def test_point_load_is_not_weighted(hooke):
     """The tip load is a facet term, not a cell integral: whatever the sample (here one cell at the clamp, weight 2,
     the tip's cell left out), the load's part of the reduced residual is V^T B u of the full assembly, exactly."""
