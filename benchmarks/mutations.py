@@ -846,7 +846,7 @@ MUTATIONS = [
       "the reduced Jacobian without the weights: not the derivative of the weighted residual"),
     M("ecsw-negative-weights", "rodfem/analysis/ecsw.py",
       [("            if np.all(z > 0):\n", "            if True:\n")],
-      [ECSW + "::test_nnls_meets_the_tolerance_with_few_non_negative_weights",
+      [ECSW + "::test_nnls_reaches_the_constrained_optimum_of_scipy",
        ECSW + "::test_weights_are_positive_few_and_fit_within_the_tolerance"],
       "the active set's least squares without the sign constraint: negative weights (an H_w that can be negative)"),
     M("ecsw-point-load-weighted", "rodfem/fem/sampled.py",

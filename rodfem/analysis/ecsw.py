@@ -131,21 +131,22 @@ def training_matrix(problem, basis: Basis, snapshots, count=DEFAULT_SNAPSHOTS):
     return np.vstack(rows), F.cells
 
 
-def nnls(G, tol, max_size=None):
-    """w >= 0 with |G w - G 1| <= tol |G 1| and few w > 0 (Lawson-Hanson's active set, stopped at the
+def nnls(G, tol, target=None, max_size=None):
+    """w >= 0 with |G w - b| <= tol |b| and few w > 0, b = `target` (default G 1) (Lawson-Hanson's active set, stopped at the
     tolerance; normal equations on the active set, the stopping test by the Gram form of the residual, good to
     about 1e-7 of |G 1|: tolerances below that run to the end).  Returns (w, relative residual)."""
     n = G.shape[1]
     gram = G.T @ G
-    b = gram @ np.ones(n)                    # G^T G 1
-    bb = float(np.ones(n) @ b)               # |G 1|^2
-    target = tol * np.sqrt(bb)
+    goal = G @ np.ones(n) if target is None else np.asarray(target, dtype=float)
+    b = G.T @ goal
+    bb = float(goal @ goal)
+    limit = tol * np.sqrt(bb)
     w, active, banned = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
 
     def residual(w):
         return np.sqrt(max(float(w @ gram @ w - 2.0 * w @ b + bb), 0.0))
     max_size = n if max_size is None else max_size
-    while residual(w) > target and active.sum() < max_size:
+    while residual(w) > limit and active.sum() < max_size:
         g = b - gram @ w                     # -gradient of |G w - G 1|^2 / 2
         g[active | banned] = -np.inf
         j = int(np.argmax(g))
@@ -172,8 +173,8 @@ def nnls(G, tol, max_size=None):
             if j in drop:                    # the new cell cannot enter with a positive weight
                 banned[j] = True
                 break
-    ones = G @ np.ones(n)     # (the residual reported from G itself: the Gram form loses digits near 0)
-    return w, float(np.linalg.norm(G @ w - ones) / max(np.linalg.norm(ones), 1e-300))
+    # (the residual reported from G itself: the Gram form loses digits near 0)
+    return w, float(np.linalg.norm(G @ w - goal) / max(np.linalg.norm(goal), 1e-300))
 
 
 def train(problem, basis: Basis, snapshots, tol=DEFAULT_TOL, count=DEFAULT_SNAPSHOTS) -> Sample:

@@ -140,7 +140,8 @@ def test_point_load_is_not_weighted(hooke):
 
 def test_weights_are_positive_few_and_fit_within_the_tolerance(hooke):
     """The trained weights are > 0, on fewer cells than the mesh has, and fit the training matrix within the
-    tolerance: |G w - G 1| <= tol |G 1|, recomputed here from G; a smaller tolerance samples more cells."""
+    tolerance: |G w - G 1| <= tol |G 1|, recomputed here from G; a smaller tolerance samples more cells, and even
+    at 1e-3 at most 40 % of them (9 of 32)."""
     cases, lay = hooke
     problem, res, X, p = cases["train"]
     basis = pod_basis(X, 3, lay, problem)
@@ -155,7 +156,7 @@ def test_weights_are_positive_few_and_fit_within_the_tolerance(hooke):
         fit = np.linalg.norm(G @ w - ones) / np.linalg.norm(ones)
         assert fit <= tol and fit == pytest.approx(s.fit_residual, rel=1e-6, abs=1e-12)
         counts.append(len(s.cells))
-    assert counts[0] <= 0.6 * p["n_elements"] and counts[0] < counts[1]
+    assert counts[0] < counts[1] <= 0.4 * p["n_elements"]
 
 
 def test_nnls_meets_the_tolerance_with_few_non_negative_weights():
@@ -171,6 +172,21 @@ def test_nnls_meets_the_tolerance_with_few_non_negative_weights():
         assert fit == pytest.approx(np.linalg.norm(G @ w - b) / np.linalg.norm(b), rel=1e-6)
         sizes.append(int(np.count_nonzero(w)))
     assert sizes[0] < sizes[1] <= sizes[2] and sizes[0] < 20
+
+
+def test_nnls_reaches_the_constrained_optimum_of_scipy():
+    """For a target outside the cone of G's columns (b = G x, x of both signs), run to its end (tolerance below the
+    optimum) the greedy NNLS stops at the optimum of scipy.optimize.nnls (Lawson-Hanson run to convergence): the
+    same residual, the weights >= 0 where the unconstrained fit has negative ones."""
+    from scipy.optimize import nnls as scipy_nnls
+    rng = np.random.default_rng(3)
+    for m, n in ((60, 30), (90, 40)):
+        G = rng.standard_normal((m, n))
+        b = G @ rng.standard_normal(n)
+        w, fit = nnls(G, 1e-14, target=b)
+        x, rnorm = scipy_nnls(G, b)
+        assert np.all(w >= 0) and fit == pytest.approx(rnorm / np.linalg.norm(b), rel=1e-8, abs=1e-12)
+        assert fit > 0.05   # the sign constraint binds
 
 
 @pytest.mark.parametrize("case", ["midpoint", "discrete-gradient"])
