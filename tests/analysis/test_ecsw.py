@@ -175,18 +175,19 @@ def test_nnls_meets_the_tolerance_with_few_non_negative_weights():
 
 
 def test_nnls_reaches_the_constrained_optimum_of_scipy():
-    """For a target outside the cone of G's columns (b = G x, x of both signs), run to its end (tolerance below the
-    optimum) the greedy NNLS stops at the optimum of scipy.optimize.nnls (Lawson-Hanson run to convergence): the
-    same residual, the weights >= 0 where the unconstrained fit has negative ones."""
+    """For targets outside the cone of G's columns (b = G x, x of both signs), run to its end (a tolerance below the
+    optimum), the greedy NNLS stops at the optimum of scipy.optimize.nnls (Lawson-Hanson run to convergence): the
+    same residual with weights >= 0, on a Gaussian G (60 x 30) and on 200 small G of positive, strongly correlated
+    columns (12 x 8), where the active set's unconstrained fit often has negative weights."""
     from scipy.optimize import nnls as scipy_nnls
-    rng = np.random.default_rng(3)
-    for m, n in ((60, 30), (90, 40)):
-        G = rng.standard_normal((m, n))
-        b = G @ rng.standard_normal(n)
+    rng = np.random.default_rng(5)
+    problems = [rng.standard_normal((60, 30))] + [rng.random((12, 8)) for _ in range(200)]
+    for G in problems:
+        b = G @ rng.standard_normal(G.shape[1])
         w, fit = nnls(G, 1e-14, target=b)
         x, rnorm = scipy_nnls(G, b)
         assert np.all(w >= 0) and fit == pytest.approx(rnorm / np.linalg.norm(b), rel=1e-8, abs=1e-12)
-        assert fit > 0.05   # the sign constraint binds
+    assert nnls(problems[0], 1e-14, target=problems[0] @ rng.standard_normal(30))[1] > 0.05   # the constraint binds
 
 
 @pytest.mark.parametrize("case", ["midpoint", "discrete-gradient"])
