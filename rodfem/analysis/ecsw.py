@@ -8,7 +8,7 @@ finite rotations and energy-based mesh sampling and weighting for computational 
 Int. J. Numer. Meth. Engng. 98(9) (2014) 625-662, doi:10.1002/nme.4668; Farhat, Chapman & Avery,
 "Structure-preserving, stability, and accuracy properties of the energy-conserving sampling and
 weighting method for the hyper reduction of nonlinear finite element dynamic models",
-Int. J. Numer. Meth. Engng. 102(5) (2015) 1077-1110, doi:10.1002/nme.4820) replaces the sum over
+Int. J. Numer. Meth. Engng. 102 (2015) 1077-1110, doi:10.1002/nme.4820) replaces the sum over
 all cells by a weighted sum over a few,
 
     V^T F_w = sum_{e in sample} w_e V_e^T F_e + sum_f V_f^T F_f,    w_e > 0,
@@ -41,8 +41,8 @@ would otherwise be scaled up to noise of the size of the others.  The weights so
 
 approximately, by the active-set non-negative least squares of Lawson & Hanson (Solving Least
 Squares Problems, Prentice-Hall 1974, ch. 23) stopped as soon as the tolerance is met (each step
-adds the cell of the largest gradient; Farhat et al. 2015 sec. 4).  The sample is the cells with
-w_e > 0.
+adds the cell of the largest gradient; the stopping test on the residual, as in Farhat et al. 2015).
+The sample is the cells with w_e > 0.
 
 Online (`HyperReducedSystem`): the residual, the Jacobian V^T J V, H_w, the supplied work and the
 facet-only outputs (the tip position) are evaluated on the sampled cells and the facets only, by
