@@ -275,9 +275,12 @@ def test_cli_hyper_reduces_and_writes_the_sample(tmp_path, rodfem):
     assert info["hyper"] == "none" and "ecsw" not in info["orders"]["3"]
 
 
-@pytest.mark.parametrize("value", ["-0.001", "1.5"])
-def test_cli_bad_tolerance_is_one_line(tmp_path, rodfem, value):
-    p = rodfem("reduce", "cantilever-2d", "--nonlinear", "--set", "n_elements=4", "--set", "t_end=0.01", "--set",
-               "degree=2", "--ecsw-tol", value, "--out", tmp_path / "x")
-    assert p.returncode == 2 and "--ecsw-tol must be a number in (0, 1)" in p.stderr, p.stderr
-    assert len(p.stderr.strip().splitlines()) == 1
+@pytest.mark.parametrize("args, message", [
+    (["--nonlinear", "--ecsw-tol", "-0.001"], "--ecsw-tol must be a number in (0, 1)"),
+    (["--nonlinear", "--ecsw-tol", "1.5"], "--ecsw-tol must be a number in (0, 1)"),
+    (["--hyper", "ecsw"], "--hyper and --ecsw-tol go with --nonlinear"),
+])
+def test_cli_bad_input_is_one_line(tmp_path, rodfem, args, message):
+    p = rodfem("reduce", "cantilever-2d", "--set", "n_elements=4", "--set", "t_end=0.01", "--set", "degree=2", *args,
+               "--out", tmp_path / "x")
+    assert p.returncode == 2 and message in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
