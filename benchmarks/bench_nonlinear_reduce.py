@@ -88,7 +88,8 @@ def main(meshes=MESHES):
                         "trained on 40 states of the training run to the relative fit residual TOL; the tip load exact), "
                         "the energy and outputs too; its balance is that of the weighted Hamiltonian H_w."],
                  notes=["Speed-up = full / reduced wall time of the time loop (500 steps, one core of a shared 2-core "
-                        "machine whose load varied during the run: compare rows of one mesh, measured minutes apart).  "
+                        "machine at a load average of 12 to 13 during the run: the full model's time at 640 elements "
+                        "ranged from 10 to 24 ms per step between runs minutes apart).  "
                         "Time split of `none`: full assembly of F and J, the projections, the small solve; of `ecsw`: "
                         "forming the state on the sampled cells' dofs, the sampled residual and Jacobian (kernel and "
                         "projection in one C loop), the solves, and H_w, the work and the tip.  The ECSW Newton keeps its "
