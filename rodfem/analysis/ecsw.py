@@ -213,6 +213,7 @@ class HyperReducedSystem(ReducedSystem):
         self.J = SampledForm(c[(name, "J")], st, cells, w)
         self.H = SampledForm(c[(name, "H")], st, cells, w)
         self.W = SampledForm(c[(name, "work")], st, cells, w) if c.get((name, "work")) is not None else None
+        self.D = SampledForm(c[(name, "dissipation")], st, cells, w) if c.get((name, "dissipation")) is not None else None
         from dolfinx.fem import IntegralType
         self.columns = {k[4:]: c[(n, k)] for (n, k) in c if n == name and k.startswith("obs:")}
         self.facet_outputs = all(set(f.integral_types) <= {IntegralType.exterior_facet} for f in self.columns.values())
@@ -309,6 +310,16 @@ class HyperReducedSystem(ReducedSystem):
         work = self.W.evaluate()
         self.timings["outputs"] += time.perf_counter() - t0
         return work
+
+    def dissipated_energy(self):
+        """h d_n of the step, weighted as the residual (Kelvin-Voigt / Rayleigh damping)."""
+        if self.D is None:
+            return 0.0
+        t0 = time.perf_counter()
+        self.rstate.set(self.xi1, self.xi0)
+        d = self.D.evaluate()
+        self.timings["outputs"] += time.perf_counter() - t0
+        return d
 
     def observe(self):
         t0 = time.perf_counter()

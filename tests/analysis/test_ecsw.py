@@ -286,3 +286,31 @@ def test_cli_bad_input_is_one_line(tmp_path, rodfem, args, message):
     p = rodfem("reduce", "cantilever-2d", "--set", "n_elements=4", "--set", "t_end=0.01", "--set", "degree=2", *args,
                "--out", tmp_path / "x")
     assert p.returncode == 2 and message in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+def test_damped_scene_keeps_its_balance_with_dissipation():
+    """Kelvin-Voigt (tau_kv = 2 ms) and Rayleigh (alpha = 5/s) damping: with the energy basis split by strain component
+    the reduced model without and with ECSW keeps H_r(n+1) - H_r(n) + h d_n = h y.u to 1e-12 of max H, dissipates
+    within 2 % of the full model's dissipated energy (9 % of the final H), and its error at r = 4 is below 1e-2.  The component
+    positions of the layout are DOLFINx's sub-space dofs of each strain component."""
+    cases, lay = trained({"tau_kv": 2e-3, "rayleigh_alpha": 5.0})
+    problem, res, X, p = cases["train"]
+    body = problem.body_items()[0][1]
+    k = 0
+    for name, _ in lay.field_slices["e"]:
+        size = body.space.field(name).size
+        for c in range(size):
+            sub = body.space.sub(name).sub(c) if size > 1 else body.space.sub(name)
+            dofs = np.sort(np.asarray(sub.collapse()[1], dtype=np.int64))
+            assert np.array_equal(np.sort(lay.e[lay.components["e"][k]]), dofs), (name, c)
+            k += 1
+    assert k == len(lay.components["e"]) == 3      # Gamma_1, Gamma_2, kappa
+    basis = pod_basis(X, 4, lay, problem)
+    full_lost = res.column("dissipated")[-1]
+    assert full_lost > 0.05 * res.column("H")[-1]
+    s = train(problem, basis, X)
+    for sample in (None, s):
+        red, S, _ = reduced_run(problem, basis, p["dt"], p["t_end"], X[:, 0], sample)
+        e = errors(res, X, red, S, lay)
+        assert e["balance_relative"] <= 1e-12 and e["configuration"] < 1e-2
+        assert red.column("dissipated")[-1] == pytest.approx(full_lost, rel=2e-2)
