@@ -1,7 +1,8 @@
 """The nonlinear reduced model (issue 29): cantilever-2d at large deflection, POD rank r = 4, 8, 16, with and
 without ECSW hyper-reduction.
 
-    .venv/bin/python benchmarks/bench_nonlinear_reduce.py     # -> benchmarks/nonlinear_reduce.{csv,md}
+    .venv/bin/python benchmarks/bench_nonlinear_reduce.py          # -> benchmarks/nonlinear_reduce.{csv,md}
+    .venv/bin/python benchmarks/bench_nonlinear_reduce.py damped   # -> benchmarks/nonlinear_reduce_damped.{csv,md}
 
 `rodfem reduce cantilever-2d --nonlinear` (rodfem/app/nonlinear_reduction.py, rodfem/analysis/galerkin.py,
 rodfem/analysis/ecsw.py): the steel strip of cantilever-2d (1 m, EI = 175 N m^2) at degree 2 (the efforts N, M
@@ -100,5 +101,29 @@ def main(meshes=MESHES):
                         "(training_s in the CSV) is a one-off cost of the set-up."])
 
 
+DAMPED = {"tau_kv": 1e-3, "rayleigh_alpha": 2.0}
+
+
+def damped(n=640, orders=(8,)):
+    """The same at one mesh with Kelvin-Voigt (tau_kv = 1 ms) and Rayleigh (alpha = 2/s) damping:
+    benchmarks/nonlinear_reduce_damped.{csv,md}."""
+    global ORDERS
+    ORDERS = orders
+    info = run_nonlinear_reduce("cantilever-2d", {**SETS, **DAMPED, "n_elements": n}, test=TEST, orders=orders,
+                                ecsw_tol=DEFAULT_TOL, compare=True)
+    rows = rows_of(info, n, DEFAULT_TOL, galerkin=True)
+    columns = [("elements", "{}"), ("r", "{}", "r"), ("unknowns", "{}", "reduced unknowns"), ("hyper", "{}", "hyper-reduction"),
+               ("sampled", "{}", "cells assembled"), ("input", "{}"), ("config_error", "{:.2e}", "configuration error"),
+               ("balance", "{:.1e}", "balance / max H (with dissipation)"), ("full_ms", "{:.3f}", "full ms/step"),
+               ("rom_ms", "{:.3f}", "reduced ms/step"), ("speed_up", "{:.2f}", "speed-up")]
+    write_report("nonlinear_reduce_damped", rows, columns,
+                 title="Nonlinear reduced model of the damped cantilever (Kelvin-Voigt tau_kv = 1 ms, Rayleigh alpha = 2/s)",
+                 intro=["The runs of nonlinear_reduce.md with damping; the energy basis split by strain component (its "
+                        "unknowns grow), the balance H_r(n+1) - H_r(n) + h d_n - h y.u."])
+
+
 if __name__ == "__main__":
-    main(tuple(int(a) for a in sys.argv[1:]) or MESHES)
+    if sys.argv[1:2] == ["damped"]:
+        damped()
+    else:
+        main(tuple(int(a) for a in sys.argv[1:]) or MESHES)
