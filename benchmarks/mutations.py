@@ -56,6 +56,7 @@ ROD_CONTACT = "tests/models/test_rod_contact.py"
 ROD_FRICTION = "tests/models/test_rod_friction.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
+KINDS = "tests/core/test_kinds.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -1060,6 +1061,24 @@ MUTATIONS = [
       [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
+    # -- bodies of one kind sharing mesh and kernels (rodfem/core/kinds.py) ---------------------------
+    M("kind-template-load-values", "rodfem/core/kinds.py",
+      [("    pairs += [(a.constant, b.constant) for a, b in zip(template.loads, body.loads)]",
+        "    pairs += [(a.constant, a.constant) for a, b in zip(template.loads, body.loads)]")],
+      [KINDS + "::test_links_of_one_kind_on_different_meshes"],
+      "the other bodies of a kind read the first body's load values"),
+    M("kind-template-objects", "rodfem/core/kinds.py",
+      [("    swap = counterparts(template, body)\n", "    swap = counterparts(template, template)\n")],
+      [KINDS + "::test_equal_links_share_one_mesh_and_kernels"],
+      "the other bodies of a kind assembled on the first body's states, step and loads"),
+    M("partial-lu-kept-by-size", "rodfem/la/partial_lu.py",
+      [("    for a in (ki, kj, src, where, postpone):", "    for a in ():")],
+      ["tests/la/test_partial_lu_reuse.py"],
+      "the partial LU's kept order and factor pattern found by the matrix's size, not its pattern"),
+    M("joint-rank-groups-split", "rodfem/core/system.py",
+      [("                parent[root(i)] = root(owner[g])", "                pass")],
+      [KINDS + "::test_redundant_joint_in_a_long_chain_is_refused"],
+      "the joints' rank check treats joints sharing velocities as independent (a redundant pin passes)"),
     # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
     M("stability-sign", "rodfem/la/pencil.py",
       [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",

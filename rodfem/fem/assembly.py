@@ -134,9 +134,9 @@ class BodyBlock:
         rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
         return self.l2g[rows], self._column(cols)
 
-    def attach(self, A):
+    def attach(self, A, shared=None):
         if self.fast:
-            self.fast.attach(A, self.lo, self.l2g)
+            self.fast.attach(A, self.lo, self.l2g, shared)
 
     # -- the state and the residual ---------------------------------------------------------
     def set_state(self, X):
@@ -173,9 +173,9 @@ class BodyBlock:
                         addv=PETSc.InsertMode.ADD_VALUES)
         return True
 
-    def restructure(self):
+    def restructure(self, shared=None):
         if self.fast:
-            self.fast.restructure()
+            self.fast.restructure(shared)
 
 
 class BlockAssembler:
