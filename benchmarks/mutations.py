@@ -63,6 +63,7 @@ ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
+ECSW = "tests/analysis/test_ecsw.py"
 TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
 CAPSTAN = "tests/models/test_capstan.py"
@@ -899,6 +900,42 @@ MUTATIONS = [
         "        self.xi0 = self.xi1.copy()\n        return previous")],
       [GALERKIN + "::test_full_rank_reproduces_the_full_model"],
       "accept() does not put x_{n+1} into the problem's x_n: every step starts from the initial state"),
+    # -- ECSW hyper-reduction (issue 29) --
+    M("ecsw-energy-not-weighted", "rodfem/fem/sampled.py",
+      [("    if (rank == 0) { o[0] += we * Ae[0]; continue; }", "    if (rank == 0) { o[0] += Ae[0]; continue; }")],
+      [ECSW + "::test_weighted_energy_balance_is_exact"],
+      "H summed over the sampled cells without their weights: not the Hamiltonian of the weighted model, whose "
+      "energy balance then breaks"),
+    M("ecsw-weights-dropped", "rodfem/fem/sampled.py",
+      [("    double we = w[e];", "    double we = 1.0;")],
+      [ECSW + "::test_error_stays_close_to_the_galerkin_model"],
+      "every sampled cell with weight 1 (the weights dropped): a consistent but wrong model, a third of the beam"),
+    M("ecsw-jacobian-not-weighted", "rodfem/fem/sampled.py",
+      [("        double v = we * Vr[a];\n        if (v == 0.0) continue;",
+        "        double v = Vr[a];\n        if (v == 0.0) continue;")],
+      [ECSW + "::test_sampled_jacobian_is_the_derivative_of_the_sampled_residual"],
+      "the reduced Jacobian without the weights: not the derivative of the weighted residual"),
+    M("ecsw-negative-weights", "rodfem/analysis/ecsw.py",
+      [("            if np.all(z > 0):\n", "            if True:\n")],
+      [ECSW + "::test_nnls_reaches_the_constrained_optimum_of_scipy",
+       ECSW + "::test_weights_are_positive_few_and_fit_within_the_tolerance"],
+      "the active set's least squares without the sign constraint: negative weights (an H_w that can be negative)"),
+    M("ecsw-point-load-weighted", "rodfem/fem/sampled.py",
+      [("                keep = np.ones(len(ent_cells), bool)\n                w = np.ones(int(keep.sum()))\n",
+        "                keep = np.array([c in by_cell for c in ent_cells.tolist()], bool)\n"
+        "                w = np.array([by_cell.get(c, 0.0) for c in ent_cells[keep].tolist()])\n")],
+      [ECSW + "::test_point_load_is_not_weighted"],
+      "the tip load (a facet term) weighted like a cell integral: dropped when its cell is not sampled"),
+    M("galerkin-damped-basis-not-split", "rodfem/analysis/galerkin.py",
+      [("    if lay.damped:   # the energy basis component by component", "    if False:   # the energy basis component by component")],
+      [ECSW + "::test_damped_scene_keeps_its_balance_with_dissipation"],
+      "with Kelvin-Voigt damping the energy basis not split by strain component: the viscous stress D e_n is not a "
+      "test vector of the reduced strain rows, the balance with dissipation breaks"),
+    M("ecsw-vanishing-equations-fitted", "rodfem/analysis/ecsw.py",
+      [("        keep = scale > VANISHING * scale.max(initial=0.0)\n", "        keep = scale > 0.0\n")],
+      [ECSW + "::test_weights_are_positive_few_and_fit_within_the_tolerance"],
+      "the identically vanishing kinematic equations kept in the training: their round-off, scaled up, is fitted "
+      "as noise and the sample grows to most of the mesh"),
     # -- Kelvin-Voigt and Rayleigh damping (issue 25) --
     M("kv-pointwise-strain-rate", "forms/planar_beam.py",
       [('        Gdot, kdot = step.rate("Gamma"), step.rate("kappa")\n',

@@ -53,13 +53,23 @@ as many energy as configuration modes had errors of 1.3 (r = 4) and, with half a
 motion; with the images the error falls with r (benchmarks/nonlinear_reduce.md).  So a block of r
 configuration modes gives 2 r unknowns (a, b) and the energy block 2 (r_e + r) (c, m), r_e = r POD modes.
 
-What is not reduced: the assembly.  F and dF/dx are assembled at full order every Newton
-iteration (no hyper-reduction), so a reduced step costs a full step's assembly plus the
-projections; only the linear solve is small.
+Damping (forms/damping.py: Kelvin-Voigt and Rayleigh): the viscous stress D e_n (D a constant
+diagonal of viscosities, e_n = (e_{n+1} - e_n)/h the strain fields' rate) enters the velocity rows; the
+full proof tests the strain rows with D e_n.  With e_n in range(Psi) that test vector lies in range(Psi)
+when Psi is block-diagonal over the scalar strain components (`split_components`: the basis of each
+component's rows of Psi; more energy unknowns), so with damping the energy basis is split, and
+
+    H_r(xi_{n+1}) - H_r(xi_n) + h d_n = h y_r . u,    h d_n = h int e_n . D e_n + h alpha int v_m . M v_m >= 0
+
+exactly (the Rayleigh part, tested with v_m = Phi b_m, needs nothing more).
+
+What is not reduced here: the assembly.  F and dF/dx are assembled at full order every Newton
+iteration, so a reduced step costs a full step's assembly plus the projections; only the linear solve
+is small (rodfem/analysis/ecsw.py hyper-reduces it).
 
 Scope (ParameterError otherwise): one body (no joints, components, contacts), every field in one of
-the four groups above, no dissipation (the viscous efforts are not fields, so their test vectors
-would not lie in range(V)), serial.
+the four groups above, no dissipation other than Kelvin-Voigt / Rayleigh damping (Maxwell branches'
+and friction's viscous efforts are not fields: their test vectors would not lie in range(V)), serial.
 """
 import time
 from dataclasses import dataclass, field
@@ -85,6 +95,8 @@ class Layout:
     n: np.ndarray
     fields: dict
     field_slices: dict = field(default_factory=dict)   # group -> [(field, slice in the group)]
+    components: dict = field(default_factory=dict)     # group -> [positions in the group of one scalar component]
+    damped: bool = False                               # Kelvin-Voigt / Rayleigh damping (see pod_basis)
 
 
 def layout(problem) -> Layout:
@@ -97,11 +109,13 @@ def layout(problem) -> Layout:
         raise ParameterError("nonlinear reduction: one body without joints, components or contacts is needed "
                              f"(the system has {len(bodies)} bodies, {len(problem.joints)} joints, "
                              f"{len(problem.components)} components, {len(problem.contacts)} contacts)")
-    if getattr(problem, "dissipates", False):
-        raise ParameterError("nonlinear reduction: the scene dissipates (damping or Maxwell branches): its viscous "
-                             "efforts are not fields, the reduced energy balance would not hold; set the damping to 0")
     _, body = bodies[0]
     model = body.model
+    damped = getattr(model, "damping", None) is not None
+    if getattr(problem, "dissipates", False) and (getattr(model, "branches", ()) or body.contacts or not damped):
+        raise ParameterError("nonlinear reduction: the scene dissipates otherwise than by Kelvin-Voigt or Rayleigh damping "
+                             "(Maxwell branches, contact friction): its viscous efforts are not fields, the reduced "
+                             "energy balance would not hold")
     kin, eff = dict(getattr(model, "kinematics", {})), dict(getattr(model, "efforts", {}))
     names = body.space.names
     grouped = set(kin) | set(kin.values()) | set(eff) | set(eff.values())
@@ -113,19 +127,22 @@ def layout(problem) -> Layout:
         raise ParameterError(f"nonlinear reduction: the fields {', '.join(rest)} are neither configuration, "
                              "velocity, energy variable nor effort (model.kinematics, model.efforts)")
     groups = {"q": list(kin), "v": list(kin.values()), "e": list(eff), "n": list(eff.values())}
-    idx, slices = {}, {}
+    idx, slices, components = {}, {}, {}
     for g, fields in groups.items():
-        parts, at, sl = [], 0, []
+        parts, at, sl, comps = [], 0, [], []
         for f in fields:
             d = np.asarray(body.space.collapse(f)[1], dtype=np.int64)
+            size = body.space.field(f).size   # (the collapsed dofs of a vector field: node by node, its components)
             parts.append(d)
             sl.append((f, slice(at, at + len(d))))
+            comps += [at + np.arange(c, len(d), size) for c in range(size)]
             at += len(d)
-        idx[g], slices[g] = np.concatenate(parts), sl
+        idx[g], slices[g], components[g] = np.concatenate(parts), sl, comps
     for a, b in (("q", "v"), ("e", "n")):
         if len(idx[a]) != len(idx[b]):   # pragma: no cover - a model whose partner fields differ in element
             raise ParameterError(f"nonlinear reduction: the fields {groups[a]} and {groups[b]} have different elements")
-    return Layout(idx["q"], idx["v"], idx["e"], idx["n"], groups, slices)
+    return Layout(idx["q"], idx["v"], idx["e"], idx["n"], groups, slices, components,
+                  bool(getattr(problem, "dissipates", False)))
 
 
 def pod(columns, rank, slices):
@@ -200,6 +217,8 @@ def pod_basis(snapshots, rank, lay: Layout, problem=None, energy_rank=None) -> B
     if problem is not None:   # the strain images first, then the POD modes they do not span
         U, sv, _ = np.linalg.svd(np.hstack([strain_images(problem, Phi, lay, x0), Psi]), full_matrices=False)
         Psi = U[:, :int(np.sum(sv > 1e-8 * sv[0]))]
+    if lay.damped:   # the energy basis component by component: D Psi c in range(Psi) for any constant diagonal D
+        Psi = split_components(Psi, lay.components["e"])
     n, rq, re = X.shape[0], Phi.shape[1], Psi.shape[1]
     V = np.zeros((n, 2 * rq + 2 * re))
     V[lay.q, :rq] = Phi
@@ -212,14 +231,25 @@ def pod_basis(snapshots, rank, lay: Layout, problem=None, energy_rank=None) -> B
     return Basis(V, x_ref, {"configuration": rq, "energy": re}, {"configuration": s_q, "energy": s_e}, lay)
 
 
+def split_components(Psi, components):
+    """The orthonormal basis of the span of Psi's rows of each scalar component (`components`: their row positions),
+    block-diagonal over the components: the span of Psi, and closed under a constant scaling per component."""
+    blocks = []
+    for rows in components:
+        U, sv, _ = np.linalg.svd(Psi[rows], full_matrices=False)
+        keep = int(np.sum(sv > 1e-8 * sv[0])) if len(sv) and sv[0] > 0 else 0
+        B = np.zeros((Psi.shape[0], keep))
+        B[rows] = U[:, :keep]
+        blocks.append(B)
+    return np.hstack(blocks)
+
+
 class ReducedSystem:
     """The reduced model of `problem` (a built single-body System) in the basis `basis`, stepped by the time
     loop (rodfem/analysis/timeloop.py: it is a `SteppedSystem`): run(ReducedSystem(problem, basis), dt, t_end)
     gives the history with H_r, supplied, balance_error and the problem's observables at the reduced states.
     It starts at the projection of the problem's current state x_n (`start` = a full state instead).
     `timings`: seconds spent assembling F and dF/dx (full order), projecting, and solving."""
-
-    dissipates = False
 
     def __init__(self, problem, basis: Basis, start=None):
         layout(problem)    # the scope checks
@@ -333,8 +363,16 @@ class ReducedSystem:
     def supplied_work(self):
         return self.problem.supplied_work()
 
+    @property
+    def dissipates(self):
+        return bool(getattr(self.problem, "dissipates", False))
+
     def dissipated_energy(self):
-        return 0.0
+        """h d_n of the step xi_n -> xi_{n+1} (the Kelvin-Voigt / Rayleigh dissipation at the reduced states)."""
+        if not self.dissipates:
+            return 0.0
+        self._set_x1(self.xi1)
+        return self.problem.dissipated_energy()
 
     def observe(self):
         return self.problem.observe()

@@ -179,6 +179,8 @@ def cmd_reduce(args):
         return cmd_reduce_nonlinear(args, out)
     if args.test:
         raise ParameterError("--test goes with --nonlinear (the test input of the nonlinear reduced model)")
+    if args.hyper is not None or args.ecsw_tol is not None:
+        raise ParameterError("--hyper and --ecsw-tol go with --nonlinear (hyper-reduction of the nonlinear reduced model)")
     info = run_reduce(args.scene, parse_sets(args.set), out=out, orders=args.order, about=args.about, t=args.time,
                       alpha=args.alpha)
     say(f"{info['scene']}: reduced PH models of the {info['n_states']}-state linear model about the {args.about} state "
@@ -195,18 +197,24 @@ def cmd_reduce(args):
 
 def cmd_reduce_nonlinear(args, out):
     """rodfem reduce SCENE --nonlinear: the POD-Galerkin reduced model of the nonlinear scene (issue 29)."""
+    from rodfem.analysis.ecsw import DEFAULT_TOL
     from rodfem.app.nonlinear_reduction import run_nonlinear_reduce
+    if args.hyper == "none" and args.ecsw_tol is not None:
+        raise ParameterError("--ecsw-tol goes with --hyper ecsw (the default), not with --hyper none")
     info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test, "--test"), orders=args.order,
-                                out=out)
+                                out=out, hyper=args.hyper or "ecsw",
+                                ecsw_tol=DEFAULT_TOL if args.ecsw_tol is None else args.ecsw_tol)
     runs = info["runs"]
     say(f"{info['scene']}: nonlinear reduced models ({runs['train']['dofs']} dofs; full model "
         + ", ".join(f"{k} {v['full_ms_per_step']:.3g} ms/step" for k, v in runs.items()) + ")")
-    say(f"{'r':>3s} {'unknowns':>8s} {'input':>6s} {'config. error':>13s} {'balance/H':>10s} {'ms/step':>8s} {'speed-up':>8s}")
+    say(f"{'r':>3s} {'unknowns':>8s} {'input':>6s} {'config. error':>13s} {'balance/H':>10s} {'ms/step':>8s} {'speed-up':>8s}"
+        + (f" {'cells':>9s}" if info["hyper"] == "ecsw" else ""))
     for r, o in info["orders"].items():
+        cells = f" {o['ecsw']['sampled']:4d}/{o['ecsw']['elements']:<4d}" if "ecsw" in o else ""
         for name in runs:
             e = o[name]
             say(f"{r:>3s} {o['reduced_unknowns']:8d} {name:>6s} {e['errors']['configuration']:13.2e} "
-                f"{e['errors']['balance_relative']:10.1e} {e['ms_per_step']:8.3g} {e['speed_up']:8.2f}")
+                f"{e['errors']['balance_relative']:10.1e} {e['ms_per_step']:8.3g} {e['speed_up']:8.2f}{cells}")
     say(f"results in {out}/nonlinear_reduce.json")
 
 
@@ -286,6 +294,12 @@ def add_reduce_parser(sub):
                          "the scene's run (docs/guide/nonlinear-reduction.md)")
     rp.add_argument("--test", action="append", metavar="NAME=VALUE",
                     help="with --nonlinear: a parameter of the test run (another input; repeatable)")
+    rp.add_argument("--hyper", choices=("ecsw", "none"),
+                    help="with --nonlinear: hyper-reduction, ECSW sampled and weighted cells (default) or none (full-order "
+                         "assembly) (docs/guide/hyper-reduction.md)")
+    rp.add_argument("--ecsw-tol", type=float, metavar="TOL",
+                    help="with --hyper ecsw: relative residual of the weights' fit to the training contributions, in (0, 1) "
+                         "(default 1e-3)")
     rp.set_defaults(func=cmd_reduce)
 
 
