@@ -13,7 +13,8 @@ Discretely the curve is the polygon through given nodes, and both terms are take
   in closed form: the pair (i, j) contributes the signed solid angle Omega_ij / (4 pi) of the
   quadrangle its four end points span (Klenin & Langowski, "Computation of writhe in modeling of
   supercoiled DNA", Biopolymers 54 (2000) 307-317, DOI 10.1002/1097-0282(20001015)54:5<307::AID-BIP20>3.0.CO;2-Y,
-  method 1a); Wr = sum over i != j.  A planar polygon has Wr = 0.
+  method 1a); Wr = sum over i != j.  A planar polygon has Wr = 0; so has a pair whose four points are
+  coplanar to round-off (|volume| <= 1e-12 of its scale: e.g. collinear segments, whose normals are noise).
 * `twist(points, u)`: the ribbon vectors u_i on the edges (made normal to each edge), carried from edge
   to edge by the discrete parallel transport (the smallest rotation taking t_i to t_{i+1}); Tw is the
   sum of the angles between the carried u_i and u_{i+1} about t_{i+1}, over 2 pi (each in (-pi, pi]:
@@ -71,7 +72,9 @@ def writhe(points):
     def asin(p, q):
         return np.arcsin(np.clip(np.einsum("ij,ij->i", p, q), -1.0, 1.0))
     omega = asin(n1, n2) + asin(n2, n3) + asin(n3, n4) + asin(n4, n1)
-    sign = np.sign(np.einsum("ij,ij->i", np.cross(r4 - r3, r2 - r1), r13))
+    volume = np.einsum("ij,ij->i", np.cross(r4 - r3, r2 - r1), r13)
+    size = np.linalg.norm(r4 - r3, axis=1) * np.linalg.norm(r2 - r1, axis=1) * np.linalg.norm(r13, axis=1)
+    sign = np.where(np.abs(volume) > 1e-12 * size, np.sign(volume), 0.0)   # coplanar pairs (round-off): 0
     return float(2.0 * np.sum(omega * sign) / (4.0 * np.pi))
 
 
