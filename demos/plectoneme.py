@@ -1,13 +1,16 @@
 # # Plectoneme: a rod twisted at one end buckles, coils around itself and keeps its link
 #
 # A straight elastic rod (3D Cosserat rod, forms/cosserat_rod.py) of length L = 1, radius r = 0.025,
-# mass 1 kg, E = 1e6 and G = E/1.5 (Poisson's ratio 0.5), after PyElastica's PlectonemesCase
+# mass 1 kg, E = 1e6 and G = E/1.5 (PyElastica's E/(1 + nu) with nu = 0.5), after PyElastica's PlectonemesCase
 # (examples/RodContactCase/RodSelfContact/PlectonemesCase): the end s = 0 is clamped; the end s = L is
 # turned about the rod's axis (x) at a constant rate, one turn every `turn_time` seconds, for `turns`
 # turns, then held.  That end stays on the axis and keeps its tangent along it, but slides freely along
 # it (no axial force), so the rod pulls it in as it coils.  A mass-proportional damping (Rayleigh's
-# alpha = 2/s: PyElastica's AnalyticalLinearDamper with its damping constant 2/(rho A)) takes out the
-# vibrations of the snaps.  The rod starts with a stress-free imperfection of amplitude `imperfection`
+# alpha = 2/s: PyElastica's AnalyticalLinearDamper with its damping constant 2/(rho A)) slows the rod;
+# it hardly touches the fast torsional and bending waves (damping ratio alpha/(2 omega)) that the snaps
+# and the contacts excite and the midpoint rule keeps, so a Kelvin-Voigt damping of retardation time
+# tau_kv = 0.01 s (damping ratio tau_kv omega/2: 1 at omega = 200/s, the first torsional mode; its
+# viscous torque at the turning rate is 1/200 of the elastic one per second of turning) takes them out.  The rod starts with a stress-free imperfection of amplitude `imperfection`
 # (z = delta sin^2(pi s/L)), which picks the direction it buckles in.
 #
 # Twisted beyond about one turn (Greenhill: the torque 2.86 pi EI/L of a clamped rod without tension,
@@ -57,18 +60,20 @@ from rodfem.forms import cosserat_rod
 from rodfem.forms.joints import prismatic
 from rodfem.forms.rod_contact import RodContact
 
-parameters = common(n_elements=24, dt=0.05, t_end=16.0, integrator="discrete-gradient", frames=81) + [
+parameters = common(n_elements=12, dt=0.02, t_end=5.0, integrator="discrete-gradient", frames=51) + [
     stiffness("L", 1.0, "m", "length"),
     stiffness("r", 0.025, "m", "radius (solid circular section)"),
     stiffness("mass", 1.0, "kg", "mass of the rod"),
     stiffness("E", 1e6, "Pa", "Young's modulus"),
-    Parameter("poisson", 0.5, "", "Poisson's ratio (G = E / (2 (1 + poisson)))", low=0, high=0.5),
-    stiffness("turns", 3.0, "", "number of turns imposed on the end s = L"),
-    stiffness("turn_time", 5.0, "s", "time per turn (the end turns at 2 pi / turn_time)"),
+    stiffness("G", 1e6 / 1.5, "Pa", "shear modulus (PyElastica's case: E / 1.5)"),
+    stiffness("turns", 2.0, "", "number of turns imposed on the end s = L"),
+    stiffness("turn_time", 2.0, "s", "time per turn (the end turns at 2 pi / turn_time)"),
     Parameter("alpha", 2.0, "1/s", "mass-proportional damping rate (force -alpha rho v; 0: none)", low=0),
-    Parameter("imperfection", 1e-3, "m", "amplitude of the stress-free initial shape z = delta sin^2(pi s/L)"),
-    stiffness("k_contact", 1e6, "N/m^2", "self-contact penalty k of psi(g) = k/3 <-g>^3 per contact point"),
-    stiffness("penetration", 2.5e-3, "m", "design penetration d (the contact zone sqrt(4 r d) shares a contact)"),
+    Parameter("tau_kv", 0.01, "s", "Kelvin-Voigt retardation time (viscous stresses tau_kv x stiffness x strain rate; 0: none)",
+              low=0),
+    Parameter("imperfection", 1e-2, "m", "amplitude of the stress-free initial shape z = delta sin^2(pi s/L)"),
+    stiffness("k_contact", 1e7, "N/m^2", "self-contact penalty k of psi(g) = k/3 <-g>^3 per contact point"),
+    stiffness("penetration", 1e-3, "m", "design penetration d (the contact zone sqrt(4 r d) shares a contact)"),
     Parameter("contact", "on", "", "off: no self-contact (the rod passes through itself; for comparison)",
               choices=("on", "off")),
 ]
@@ -76,8 +81,7 @@ parameters = common(n_elements=24, dt=0.05, t_end=16.0, integrator="discrete-gra
 
 def section(p):
     """(rhoA, rhoJ, C_N, C_M) of the round section."""
-    r, E = p["r"], p["E"]
-    G = E / (2 * (1 + p["poisson"]))
+    r, E, G = p["r"], p["E"], p["G"]
     A, I = np.pi * r**2, np.pi * r**4 / 4
     rhoA = p["mass"] / p["L"]
     rho = rhoA / A
@@ -131,7 +135,7 @@ def check(p):
 def build(p, comm):
     check(p)
     rhoA, rhoJ, C_N, C_M = section(p)
-    rayleigh = cosserat_rod.rayleigh(p["alpha"], 0.0, C_N, C_M) if p["alpha"] > 0 else None
+    rayleigh = cosserat_rod.rayleigh(p["alpha"], p["tau_kv"], C_N, C_M) if p["alpha"] > 0 or p["tau_kv"] > 0 else None
     model = cosserat_rod.CosseratRod(rhoA, rhoJ, C_N, C_M, damping=rayleigh)
     system = System(integrator=p["integrator"], comm=comm,
                     newton_options={"snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_max_it": 40})
