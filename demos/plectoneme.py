@@ -72,7 +72,7 @@ parameters = common(n_elements=12, dt=0.02, t_end=5.0, integrator="discrete-grad
     Parameter("tau_kv", 0.01, "s", "Kelvin-Voigt retardation time (viscous stresses tau_kv x stiffness x strain rate; 0: none)",
               low=0),
     Parameter("imperfection", 1e-2, "m", "amplitude of the stress-free initial shape z = delta sin^2(pi s/L)"),
-    stiffness("k_contact", 1e7, "N/m^2", "self-contact penalty k of psi(g) = k/3 <-g>^3 per contact point"),
+    stiffness("k_contact", 5e7, "N/m^2", "self-contact penalty k of psi(g) = k/3 <-g>^3 per contact point"),
     stiffness("penetration", 1e-3, "m", "design penetration d (the contact zone sqrt(4 r d) shares a contact)"),
     Parameter("contact", "on", "", "off: no self-contact (the rod passes through itself; for comparison)",
               choices=("on", "off")),
@@ -138,7 +138,7 @@ def build(p, comm):
     rayleigh = cosserat_rod.rayleigh(p["alpha"], p["tau_kv"], C_N, C_M) if p["alpha"] > 0 or p["tau_kv"] > 0 else None
     model = cosserat_rod.CosseratRod(rhoA, rhoJ, C_N, C_M, damping=rayleigh)
     system = System(integrator=p["integrator"], comm=comm,
-                    newton_options={"snes_atol": 1e-10, "snes_rtol": 1e-12, "snes_max_it": 40})
+                    newton_options={"snes_atol": 1e-11, "snes_rtol": 1e-14, "snes_max_it": 40})
     rod = system.add("rod", model, p["L"], p["n_elements"], initial=initial(p), supports=[Support("left", "clamped")])
     # ## The turned end: prismatic along the turning frame's d1 (= x): turns with it, slides along x
     system.join(prismatic(0), ground((p["L"], 0.0, 0.0)), rod.end, name="twist", motion=turning_frame(p))

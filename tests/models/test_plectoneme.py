@@ -54,11 +54,13 @@ def test_link_holds_through_buckling_with_self_contact():
     assert pen.max() > 0
     assert pen.max() < 0.2 * p["r"]
     H, supplied, lost = column(result, "H"), column(result, "supplied"), column(result, "dissipated")
-    assert np.abs(H - H[0] - supplied + lost).max() < 1e-12 * max(1.0, supplied[-1])
-    assert np.abs(column(result, "balance_error")).max() < 1e-13 * max(1.0, supplied[-1])
+    assert np.abs(H - H[0] - supplied + lost).max() < 1e-11 * supplied[-1]
+    assert np.abs(column(result, "balance_error")).max() < 1e-12 * supplied[-1]
     off = scene.values({**SMALL, "t_end": 3.2, "contact": "off"})
     free = run(scene.build(off, MPI.COMM_WORLD), off["dt"], off["t_end"])
-    assert np.abs(column(free, "Lk_error")).max() == pytest.approx(2.0, abs=1e-3)
+    jump = np.abs(column(free, "Lk_error"))
+    first = int(np.argmax(jump > 0.5))                  # the first step with a crossing
+    assert jump[first] == pytest.approx(2.0, abs=1e-6) and jump[:first].max() < 1e-6
 
 
 def test_bad_input_is_refused_in_one_line():
