@@ -613,7 +613,7 @@ MUTATIONS = [
       [f"{LINKING}::test_helix_writhe_twist_and_link"],
       "the ribbon compared edge to edge without the parallel transport: Tw of a helix wrong"),
     M("link-closure-not-far", "rodfem/analysis/linking.py",
-      [("def link(points, directors, axis=(1.0, 0.0, 0.0), far=1e3):", "def link(points, directors, axis=(1.0, 0.0, 0.0), far=0.3):")],
+      [("def link(points, directors, axis=(1.0, 0.0, 0.0), far=1e3):", "def link(points, directors, axis=(1.0, 0.0, 0.0), far=0.02):")],
       [f"{LINKING}::test_helix_writhe_twist_and_link"],
       "the open rod closed near by: the closure's own writhe in Lk"),
     M("moving-ground-frame-rate", "rodfem/core/joints.py",
