@@ -9,9 +9,11 @@
 # alpha = 2/s: PyElastica's AnalyticalLinearDamper with its damping constant 2/(rho A)) slows the rod;
 # it hardly touches the fast torsional and bending waves (damping ratio alpha/(2 omega)) that the snaps
 # and the contacts excite and the midpoint rule keeps, so a Kelvin-Voigt damping of retardation time
-# tau_kv = 0.01 s (damping ratio tau_kv omega/2: 1 at omega = 200/s, the first torsional mode; its
-# viscous torque at the turning rate is 1/200 of the elastic one per second of turning) takes them out.  The rod starts with a stress-free imperfection of amplitude `imperfection`
-# (z = delta sin^2(pi s/L)), which picks the direction it buckles in.
+# tau_kv = 0.01 s takes them out (damping ratio tau_kv omega/2: 0.57 for the first torsional mode,
+# omega = pi sqrt(GJ/rhoJ_1)/L = 114/s; while the end turns at a constant rate its viscous torque is
+# tau_kv/t of the elastic one after the time t, 0.5 % after 2 s).  The rod starts with a stress-free
+# imperfection of amplitude `imperfection` (z = delta sin^2(pi s/L)), which picks the direction it
+# buckles in.
 #
 # Twisted beyond about one turn (Greenhill: the torque 2.86 pi EI/L of a clamped rod without tension,
 # which twists it by M L/GJ = 1.07 turns) the straight rod buckles into a loop; the loop tightens until
@@ -43,13 +45,12 @@
 # (`self.energy`), so with the discrete gradient H_n - H_0 - supplied + dissipated = 0 to round-off
 # (`balance_error` per step).  `self.penetration` is the largest overlap of the tube with itself.
 #
-# Run it:  rodfem run plectoneme --out results/plectoneme                       (3 turns, about 20 s)
-#          rodfem run plectoneme --set turns=10 --set t_end=60 --set n_elements=50 --out results/plectoneme-10
+# Run it:  rodfem run plectoneme --out results/plectoneme           (2 turns in 4 s: 250 steps, about 25 s)
+#          rodfem run plectoneme --set turns=10 --set n_elements=30 --set t_end=25 --out results/plectoneme-10
 
 import sys
 
 import numpy as np
-from mpi4py import MPI
 
 from rodfem import Support, System, ground
 from rodfem.analysis.linking import link
@@ -85,7 +86,8 @@ def section(p):
     A, I = np.pi * r**2, np.pi * r**4 / 4
     rhoA = p["mass"] / p["L"]
     rho = rhoA / A
-    return rhoA, (2 * rho * I, rho * I, rho * I), [1 / (E * A), 1 / (G * A), 1 / (G * A)], [1 / (2 * G * I), 1 / (E * I), 1 / (E * I)]
+    C_N, C_M = [1 / (E * A), 1 / (G * A), 1 / (G * A)], [1 / (2 * G * I), 1 / (E * I), 1 / (E * I)]
+    return rhoA, (2 * rho * I, rho * I, rho * I), C_N, C_M
 
 
 def angle(p):
