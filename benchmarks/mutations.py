@@ -65,6 +65,7 @@ REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
 TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
+STABILITY = "tests/analysis/test_stability.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -983,6 +984,12 @@ MUTATIONS = [
       [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
+    # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
+    M("stability-sign", "rodfem/la/pencil.py",
+      [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",
+        "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
+      [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
+      "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
 ]
 
 
