@@ -140,7 +140,7 @@ def build(p, comm):
     rayleigh = cosserat_rod.rayleigh(p["alpha"], p["tau_kv"], C_N, C_M) if p["alpha"] > 0 or p["tau_kv"] > 0 else None
     model = cosserat_rod.CosseratRod(rhoA, rhoJ, C_N, C_M, damping=rayleigh)
     system = System(integrator=p["integrator"], comm=comm,
-                    newton_options={"snes_atol": 1e-11, "snes_rtol": 1e-14, "snes_max_it": 40})
+                    newton_options={"snes_atol": 1e-11, "snes_rtol": 1e-14, "snes_stol": 1e-13, "snes_max_it": 40})
     rod = system.add("rod", model, p["L"], p["n_elements"], initial=initial(p), supports=[Support("left", "clamped")])
     # ## The turned end: prismatic along the turning frame's d1 (= x): turns with it, slides along x
     system.join(prismatic(0), ground((p["L"], 0.0, 0.0)), rod.end, name="twist", motion=turning_frame(p))
