@@ -53,6 +53,8 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
+LINKING = "tests/analysis/test_linking.py"
+PLECTONEME = "tests/models/test_plectoneme.py"
 ROD_FRICTION = "tests/models/test_rod_friction.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
@@ -602,6 +604,39 @@ MUTATIONS = [
       [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
+
+    # -- the plectoneme: link, twist, writhe and the turned end (issue 24) --------------------------
+    M("writhe-unsigned", "rodfem/analysis/linking.py",
+      [("    sign = np.where(np.abs(volume) > 1e-12 * size, np.sign(volume), 0.0)", "    sign = np.where(np.abs(volume) > 1e-12 * size, 1.0, 0.0)")],
+      [f"{LINKING}::test_planar_curves_have_no_writhe", f"{LINKING}::test_helix_writhe_twist_and_link"],
+      "the segment pairs' solid angles summed without their sign: the writhe of a mirror image unchanged"),
+    M("writhe-coplanar-noise", "rodfem/analysis/linking.py",
+      [("    sign = np.where(np.abs(volume) > 1e-12 * size, np.sign(volume), 0.0)", "    sign = np.sign(volume)")],
+      [f"{LINKING}::test_planar_curves_have_no_writhe"],
+      "coplanar segment pairs (collinear leads and closure) counted with the noise of their normals"),
+    M("twist-no-transport", "rodfem/analysis/linking.py",
+      [("    carried = _transport(u[:-1], t[:-1], t[1:])", "    carried = u[:-1]")],
+      [f"{LINKING}::test_helix_writhe_twist_and_link"],
+      "the ribbon compared edge to edge without the parallel transport: Tw of a helix wrong"),
+    M("twist-angle-sign", "rodfem/analysis/linking.py",
+      [("    angle = np.arctan2(np.einsum(\"ij,ij->i\", np.cross(carried, u[1:]), t[1:])",
+        "    angle = np.arctan2(np.einsum(\"ij,ij->i\", np.cross(u[1:], carried), t[1:])")],
+      [f"{LINKING}::test_straight_twisted_rod_and_a_crossing", f"{PLECTONEME}::test_below_buckling_the_rod_twists_straight"],
+      "the twist angle measured the wrong way round (from u_{i+1} to the carried u_i): Lk = Wr - Tw"),
+    M("rodcontact-residual-at-clamp", "rodfem/core/bodycontact.py",
+      [("            own = rows >= 0          # (a Vec does not ignore the index -1 as a Mat does: the supported rows out)",
+        "            own = rows >= -1")],
+      [f"{PLECTONEME}::test_link_holds_through_buckling_with_self_contact"],
+      "the contact's residual written with the index -1 for a supported node (PETSc's Vec refuses it)"),
+    M("moving-ground-frame-rate", "rodfem/core/joints.py",
+      [("        r_lam = Gq @ vm + Gp @ (p1 - p0) / h", "        r_lam = Gq @ vm")],
+      [f"{PLECTONEME}::test_below_buckling_the_rod_twists_straight"],
+      "the turning frame's rate left out of the joint's rows: the end does not turn"),
+    M("moving-ground-work", "rodfem/core/joints.py",
+      [("        return r_v, r_lam, drv_dq, Gq.T, drl_dq, 0.5 * Gq, float(lam @ (Gp @ (p1 - p0)))",
+        "        return r_v, r_lam, drv_dq, Gq.T, drl_dq, 0.5 * Gq, 0.0")],
+      [f"{PLECTONEME}::test_below_buckling_the_rod_twists_straight"],
+      "the moving frame's work not booked in `supplied`: the balance breaks"),
 
     # -- friction between rods; the contact pattern grown at once (issue 24) ----------------------
     M("rodfriction-one-sided", "rodfem/core/bodycontact.py",

@@ -397,8 +397,9 @@ class BodyContacts:
                 F, power = p.friction(X0, X1, *V, w, self.rule)
                 vals = vals - F
                 lost -= self.h * float(np.sum(power))
-            b.setValues(self._free(p.indices(pairs, "v").ravel()), np.ascontiguousarray(vals.ravel()),
-                        addv=PETSc.InsertMode.ADD)
+            rows = self._free(p.indices(pairs, "v").ravel())
+            own = rows >= 0          # (a Vec does not ignore the index -1 as a Mat does: the supported rows out)
+            b.setValues(rows[own], np.ascontiguousarray(vals.ravel()[own]), addv=PETSc.InsertMode.ADD)
         self.dissipated = self.comm.bcast(lost, root=0)
         self.seconds["forces"] += time.process_time() - start
 

@@ -175,3 +175,75 @@ class Joint:
         drv_dq = 0.5 * np.einsum("k,kij->ij", lam, self.Q)
         drl_dq = 0.5 * np.einsum("kij,j->ki", self.Q, vm)
         return r_v, r_lam, drv_dq, G.T, drl_dq, 0.5 * G, -float(lam @ dgp)
+
+
+class MovingGround(Joint):
+    """A joint g(a, b, a0, b0) = 0 between a GROUND frame that moves on a prescribed path,
+    motion(t) = (x(t), R(t)) (R = [d1 d2 d3], the frame at t = 0: the ground point's own), and a body's
+    point b: e.g. `prismatic(0)` to a frame turning about its d1 turns a rod's end about the axis and
+    lets it slide along it.
+
+    With p(t) = (x, d1, d2, d3)(t) the frame's 12 coordinates, g(p, q) is quadratic in (p, q) together
+    (as every joint of forms/joints.py), so the step's rows are the plain joint's with p's increment
+    known (p_{n+1} - p_n = h v_p):
+
+        momentum rows of b:   + G_q(p_m, q_m)^T lambda
+        the joint's rows:     G_q(p_m, q_m) v_m + G_p(p_m, q_m) (p_{n+1} - p_n)/h = 0,
+
+    and g(p_{n+1}, q_{n+1}) - g(p_n, q_n) = G(p_m, q_m)(X_{n+1} - X_n) exactly: g = 0 holds to round-off
+    for all time.  The reactions do the work -lambda . G_q (q_{n+1} - q_n) = lambda . G_p (p_{n+1} - p_n)
+    on the body in a step: the work the motion supplies (booked in `supplied`)."""
+
+    def __init__(self, constraint: Callable, a, b, name: str = "", motion: Callable = None):
+        super().__init__(constraint, a, b, name)
+        self.motion = motion
+
+    def frame_coordinates(self, t):
+        """p(t) = (x, d1, d2, d3) of the moving frame (12 numbers)."""
+        x, R = self.motion(t)
+        x, R = np.asarray(x, dtype=float).ravel(), np.asarray(R, dtype=float).reshape(3, 3)
+        if x.shape != (3,) or not (np.all(np.isfinite(x)) and np.all(np.isfinite(R))):
+            raise ConstraintError(f"joint {self.name}: motion(t) must give a finite position (3) and R (3 x 3) "
+                                  f"(got {x}, {R} at t = {t:g})")
+        return np.concatenate([x, R[:, 0], R[:, 1], R[:, 2]])
+
+    def bind(self, frame_a, frame_b, qa0, qb0, scale):
+        """The quadratic form of g over (p, q); Q, c, e of the base class: the form in q at p(0) (what the
+        checks at the start see)."""
+        p0 = self.frame_coordinates(0.0)
+        fixed = frame_a(qa0)
+        if np.max(np.abs(p0 - np.concatenate([fixed.x, *fixed.d]))) > 1e-12 * max(scale, 1.0):
+            raise ConstraintError(f"joint {self.name}: motion(0) must be the ground point's frame "
+                                  f"({fixed.x}, R = [d1 d2 d3]); got {p0}")
+
+        def moving(p):
+            return Frame(x=p[:3], d=[p[3:6], p[6:9], p[9:12]])
+        self.full = None      # (the base class's checks see the form over (p, q))
+        super().bind(moving, frame_b, p0, qb0, scale)
+        self.full = (self.Q, self.c, self.e)
+        Q, c, e = self.full
+        self.Q = Q[:, 12:, 12:]
+        self.c = c[:, 12:] + np.einsum("kij,j->ki", Q[:, 12:, :12], p0)
+        self.e = e + c[:, :12] @ p0 + 0.5 * np.einsum("i,kij,j->k", p0, Q[:, :12, :12], p0)
+
+    def position_residual(self, q, t):
+        if self.full is None:
+            return super().position_residual(q, t)
+        X = np.concatenate([self.frame_coordinates(t), q])
+        Q, c, e = self.full
+        return 0.5 * np.einsum("i,kij,j->k", X, Q, X) + c @ X + e
+
+    def step(self, q0, q1, v0, v1, lam, h, t0, t1):
+        """As Joint.step, with the frame's coordinates p(t0), p(t1) before the body's."""
+        p0, p1 = self.frame_coordinates(t0), self.frame_coordinates(t1)
+        Q, c, _ = self.full
+        Xm = np.concatenate([0.5 * (p0 + p1), 0.5 * (q0 + q1)])
+        G = np.einsum("kij,j->ki", Q, Xm) + c
+        Gp, Gq = G[:, :12], G[:, 12:]
+        vm = 0.5 * (v0 + v1)
+        r_v = Gq.T @ lam
+        r_lam = Gq @ vm + Gp @ (p1 - p0) / h
+        Qqq, Qqp = Q[:, 12:, 12:], Q[:, 12:, :12]
+        drv_dq = 0.5 * np.einsum("k,kij->ij", lam, Qqq)
+        drl_dq = 0.5 * (np.einsum("kij,j->ki", Qqq, vm) + np.einsum("kij,j->ki", Qqp, (p1 - p0) / h))
+        return r_v, r_lam, drv_dq, Gq.T, drl_dq, 0.5 * Gq, float(lam @ (Gp @ (p1 - p0)))

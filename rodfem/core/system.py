@@ -33,7 +33,7 @@ from rodfem.core.body import Body
 from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
-from rodfem.core.joints import Frame, Joint, Point
+from rodfem.core.joints import Frame, Joint, MovingGround, Point
 from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
@@ -127,11 +127,19 @@ class System:
         self.bodies[name] = ref
         return ref
 
-    def join(self, constraint: Callable, a: Point, b: Point, name: str = "", drive: Optional[Callable] = None) -> Joint:
+    def join(self, constraint: Callable, a: Point, b: Point, name: str = "", drive: Optional[Callable] = None,
+             motion: Optional[Callable] = None) -> Joint:
         """Join point a to point b (or GROUND) by the joint `constraint` of rodfem/forms/joints.py;
-        `drive(t)` (zero at t = 0) prescribes its motion: g(q) = drive(t)."""
+        `drive(t)` (zero at t = 0) prescribes its motion: g(q) = drive(t).  `motion(t)` = (x, R): the
+        ground point a moves on this path (rodfem/core/joints.py, `MovingGround`; x(0), R(0) its own)."""
         self._check_points(f"joint {name or constraint}", a, b)
-        joint = Joint(constraint, a, b, name or f"{getattr(constraint, '__name__', 'joint')}{len(self.joints) + 1}", drive)
+        name = name or f"{getattr(constraint, '__name__', 'joint')}{len(self.joints) + 1}"
+        if motion is not None:
+            if a.body is not None or drive is not None:
+                raise ConstraintError(f"joint {name}: a motion moves the ground point a (give a = ground(...), no drive)")
+            joint = MovingGround(constraint, a, b, name, motion)
+        else:
+            joint = Joint(constraint, a, b, name, drive)
         self._check_name(joint.name)
         self.joints.append(joint)
         return joint
