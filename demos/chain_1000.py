@@ -30,8 +30,6 @@
 
 import sys
 
-import numpy as np
-
 from rodfem import Load, System
 from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness

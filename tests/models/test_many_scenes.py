@@ -15,7 +15,7 @@ from rodfem import run
 from rodfem.analysis.statics import solve as static_solve
 from rodfem.app.scene import load, scenes
 from rodfem.demos import _pendulum_reference as pendulum
-from rodfem.demos import cable_net, tensegrity
+from rodfem.demos import tensegrity
 from rodfem.demos._multibody import nodal, rod_inertia
 
 COMM = MPI.COMM_WORLD
@@ -173,12 +173,14 @@ WORKS = {   # W'(C), W''(C) of forms/string_materials.py, written out again
 
 
 def net_by_numpy(p):
-    """The sagged net by Newton's method on the discrete springs: every string element (reference
-    length h, end nodes a, b) stores h W(|x_b - x_a|^2 / h^2); a node carries rhoA g h / 2 of each
-    of its elements; the edge nodes are fixed, the crossings shared.  Returns {string k: nodes (ne+1, 3)}."""
+    """The sagged net by Newton's method on the discrete springs, written here again from the scene's
+    description (not from its code): every string element (reference length h, end nodes a, b) stores
+    h W(|x_b - x_a|^2 / h^2); a node carries rhoA g h / 2 of each of its elements; the edge nodes are
+    fixed, the crossings shared.  Returns {string k: nodes (ne+1, 3)}."""
     n, ne = p["n"], p["n_elements"]
     h = p["L"] / (n + 1) / ne
     dW, ddW = WORKS[p["material"]]
+    spacing = p["L"] / (n + 1) * (1 + p["prestretch"])   # the grid, stretched, centred at the origin
     index, X, elements, strings = {}, [], [], []
     def node_id(key, x):   # noqa: E306
         if key not in index:
@@ -186,11 +188,13 @@ def net_by_numpy(p):
             X.append(x)
         return index[key]
     fixed = []
-    for k, (A, B) in enumerate(cable_net.segments(n)):
-        xa, xb = cable_net.node(p, *A), cable_net.node(p, *B)
+    rows = [((i, j), (i + 1, j)) for j in range(1, n + 1) for i in range(n + 1)]      # the scene's order: along x,
+    columns = [((i, j), (i, j + 1)) for i in range(1, n + 1) for j in range(n + 1)]   # then along y
+    for k, (A, B) in enumerate(rows + columns):
+        xa, xb = (np.array([(c[0] - 0.5 * (n + 1)) * spacing, (c[1] - 0.5 * (n + 1)) * spacing, 0.0]) for c in (A, B))
         ids = [node_id(("grid", A), xa)] + [node_id(("in", k, e), xa + (xb - xa) * e / ne) for e in range(1, ne)] \
             + [node_id(("grid", B), xb)]
-        fixed += [i for i, ij in ((ids[0], A), (ids[-1], B)) if cable_net.on_edge(n, ij)]
+        fixed += [i for i, ij in ((ids[0], A), (ids[-1], B)) if ij[0] in (0, n + 1) or ij[1] in (0, n + 1)]
         elements += list(zip(ids[:-1], ids[1:]))
         strings.append(ids)
     X, e = np.array(X), np.array(elements)
@@ -228,7 +232,7 @@ def test_net_static_sag_against_numpy_newton(n, n_elements, material):
     static_solve(system, steps=1)
     ref = net_by_numpy(p)
     worst, sag = 0.0, 0.0
-    for k in range(len(cable_net.segments(n))):
+    for k in range(len(ref)):
         s, r = nodal(system.body(f"s{k}"), "r", "x0")
         worst = max(worst, np.max(np.abs(r - ref[k])))
         sag = max(sag, -np.min(r[:, 2]))
