@@ -24,7 +24,7 @@ CASES = [   # (scene, overrides, steps, what, rank counts)
     ("chain-1000", {"n_links": 1000}, 5, "1000 links", (1,)),   # (8 GB per process: not twice on this machine)
     ("tensegrity", {}, 200, "1 prism: 3 struts, 9 cables (default)", (1, 2)),
     ("tensegrity", {"stories": 10}, 20, "tower of 10 prisms: 30 struts, 63 cables", (1, 2)),
-    ("cable-net", {}, 20, "6 x 6 crossings, 84 strings (default)", (1, 2)),
+    ("cable-net", {}, 20, "4 x 4 crossings, 40 strings (default)", (1, 2)),
     ("cable-net", {"n": 20}, 5, "20 x 20 crossings, 840 strings", (1, 2)),
 ]
 QUICK = [c for c in CASES if "default" in c[3]]

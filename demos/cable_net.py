@@ -43,7 +43,7 @@ from rodfem.forms.string import MATERIALS, String
 
 parameters = [p for p in common(n_elements=2, dt=0.005, t_end=0.5, integrator="discrete-gradient")
               if p.name != "section"] + [
-    Parameter("n", 6, "", "crossings per side (n x n crossings, 2 n (n + 1) strings)", low=1, high=200),
+    Parameter("n", 4, "", "crossings per side (n x n crossings, 2 n (n + 1) strings)", low=1, high=200),
     stiffness("L", 1.0, "m", "side of the net (unstretched: n + 1 segments of L / (n + 1))"),
     Parameter("prestretch", 0.02, "", "initial stretch of every cable (length / reference length - 1)", low=0,
               high=1, low_open=True),
