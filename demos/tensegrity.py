@@ -19,7 +19,7 @@
 # (the classical result for the regular n-prism, twist 90 - 180/n deg from
 # the other end's convention, for n = 3: Tibert & Pellegrino, "Review of
 # form-finding methods for tensegrity structures", International Journal
-# of Space Structures 18(4), 2003, 209-223, doi 10.1260/026635103322987940;
+# of Space Structures 18(4), 2003, 209-223;
 # tests/models/test_many_scenes.py checks it from the null space of the
 # equilibrium matrix).  In a tower the shared inner triangles carry the
 # force density of two prisms, 2 q_horizontal.
