@@ -1,7 +1,11 @@
 """The many-part scenes at their big sizes: build time, time per step, serial and on 2 ranks (issue 26).
 
-    .venv/bin/python benchmarks/many_scenes.py [--quick] [--ranks 1 2] [--timeout 1500]
+    .venv/bin/python benchmarks/many_scenes.py [--quick] [--ranks 1 2] [--timeout 1500] [--only SIZE ...] [--append]
                                                # -> benchmarks/many_scenes.{csv,md}
+
+--only runs the cases whose size label contains one of the words (e.g. --only "1000 links" tower);
+--append keeps the rows of an earlier run (benchmarks/many_scenes.csv) of the cases not run now.
+The table is rewritten after every case.
 
 Each case runs in a process of its own (under `mpirun -n 2` for 2 ranks, inside `timeout`): the
 scene's system is sketched and built (`build s`: wall and CPU time of scene.build + System.build,
@@ -75,18 +79,52 @@ def main():
     ap.add_argument("--quick", action="store_true", help="the default sizes only")
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--timeout", type=int, default=1500, help="seconds per case and rank count")
+    ap.add_argument("--only", nargs="+", help="the cases whose size label contains one of these texts")
+    ap.add_argument("--append", action="store_true", help="keep the earlier rows of the cases not run now")
     args = ap.parse_args()
     sys.path.insert(0, HERE)
-    from report import write_report
-    rows = []
-    for case in (QUICK if args.quick else CASES):
+    cases = [c for c in (QUICK if args.quick else CASES) if not args.only or any(w in c[3] for w in args.only)]
+    rows = earlier([(c[0], c[3]) for c in cases]) if args.append else []
+    for case in cases:
         for ranks in [r for r in args.ranks if r in case[4]]:
             r = child(case, ranks, args.timeout)
             rows.append(dict(scene=case[0], size=case[3], ranks=ranks, steps=case[2], **r))
             print(rows[-1], flush=True)
+            report(sorted(rows, key=order))
+
+
+def order(row):
+    """The rows in the order of CASES, then by ranks."""
+    labels = [(c[0], c[3]) for c in CASES]
+    key = (row["scene"], row["size"])
+    return (labels.index(key) if key in labels else len(labels), int(row["ranks"]))
+
+
+def earlier(replaced):
+    """The rows of benchmarks/many_scenes.csv but those of the cases `replaced` ((scene, size) pairs), numbers as
+    numbers."""
+    import csv
+    path = os.path.join(HERE, "many_scenes.csv")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        rows = [r for r in csv.DictReader(f) if (r["scene"], r["size"]) not in replaced]
+    for r in rows:
+        for k, v in list(r.items()):
+            if v == "":
+                del r[k]
+            elif k not in ("scene", "size", "status"):
+                r[k] = float(v) if any(c in v for c in ".e") else int(v)
+    return rows
+
+
+def report(rows):
+    from report import write_report
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    rows = [{k: r.get(k) for k in keys} for r in rows]   # (the CSV's columns: those of every row)
 
     def fmt(key, spec):
-        return lambda r: format(r[key], spec) if key in r else ""
+        return lambda r: format(r[key], spec) if r.get(key) is not None else ""
     columns = [("scene", "{}"), ("size", "{}"), ("ranks", "{}"), ("bodies", fmt("bodies", "d")),
                ("joints", fmt("joints", "d")), ("dofs", fmt("dofs", "d")), ("build_s", fmt("build_s", ".2f"), "build s"),
                ("build_cpu_s", fmt("build_cpu_s", ".2f"), "build CPU s"), ("steps", "{}"),
