@@ -64,6 +64,9 @@ REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
 TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
+CAPSTAN = "tests/models/test_capstan.py"
+GRASP = "tests/models/test_soft_arm_grasp.py"
+STABILITY = "tests/analysis/test_stability.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -598,6 +601,33 @@ MUTATIONS = [
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
 
+    # -- the capstan and the grasp (issue 24) --------------------------------------------------------
+    M("capstan-friction-normal-unscaled", "forms/contact.py",
+      [("        N = -z * norm\n", "        N = -z\n")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the friction's normal force -psi'(xi) without |grad xi| (right on a plane, |grad xi| = 1; wrong on a drum)"),
+    M("capstan-arc-spacing", "demos/capstan.py",
+      [('    h = 2 * Rc * np.sin(theta / (2 * n_a)) / stretch(p, p["T1"])', '    h = Rc * theta / n_a / stretch(p, p["T1"])')],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the string's nodes on the drum at arc-length spacing: its chords start compressed, not at T1"),
+    M("capstan-oracle-sign", "demos/capstan.py",
+      [("        ratio *= (e_in @ t + mu * (e_in @ n)) / (e_out @ t + mu * (e_out @ n))",
+        "        ratio *= (e_in @ t - mu * (e_in @ n)) / (e_out @ t - mu * (e_out @ n))")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the discrete polygon's node balance with the friction turned round"),
+    M("capstan-regularization-ignored", "demos/capstan.py",
+      [('    mu = p["mu"] * p["V"] / np.hypot(p["V"], p["eps"])\n    return', '    mu = p["mu"]\n    return')],
+      [f"{CAPSTAN}::test_regularized_friction_gives_the_regularized_ratio"],
+      "the regularized ratio with the Coulomb coefficient (the viscous part below eps ignored)"),
+    M("capstan-push", "demos/capstan.py",
+      [("        return -u * direction", "        return u * direction")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the right end pushed instead of pulled"),
+    M("grasp-soft-penalty", "demos/soft_arm_grasp.py",
+      [('stiffness_for(tau / Rw, p["penetration"])', 'stiffness_for(tau / Rw, 4 * p["penetration"])')],
+      [f"{GRASP}::test_grasp_keeps_the_balance_and_the_penetration"],
+      "the pole's penalty made for four times the stated penetration"),
+
     # -- 3D rod materials (issue 31) --
     M("rod-material-dg-dropped", "forms/cosserat_rod.py",
       [('weights=[c[f"w{i}"] for i in range(6)])', 'weights=[0.0 * c[f"w{i}"] for i in range(6)])')],
@@ -988,6 +1018,12 @@ MUTATIONS = [
       [('n, a = p["n"], p["L"] / (p["n"] + 1) * (1 + p["prestretch"])', 'n, a = p["n"], p["L"] / (p["n"] + 1)')],
       [MANY + "::test_net_static_sag_against_numpy_newton"],
       "the edge nodes placed without the pre-stretch (the strings start slack)"),
+    # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
+    M("stability-sign", "rodfem/la/pencil.py",
+      [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",
+        "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
+      [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
+      "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
 ]
 
 
