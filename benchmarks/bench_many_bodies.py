@@ -10,10 +10,11 @@ process; N = 1000: one run; CPU time of the process, not wall time: this machine
 several developers and its wall times swing by 2x) and the build's CPU time (a build after the
 first of the process: forms found in the JIT cache), for
 N = 1, 4, 16, 64, 256 and 1000; then the 10-element planar beam (flying-spaghetti-2d, 300 steps)
-and the 16-element 3D rod (flying-spaghetti-3d) in a 10-step and a 200-step run.  Each case runs
+the 10-element 3D rod (flying-spaghetti-3d, 200 steps) and the 16-element one in a 10-step and a 1000-step run.  Each case runs
 in a process of its own, side by side for
 
 * `batch`: this checkout, bodies of the same compiled forms assembled together (rodfem/fem/batch.py),
+  bodies of one kind sharing their mesh and compiled forms (rodfem/core/kinds.py),
 * `body by body`: this checkout with `System(batch=False)`,
 * `before`: another checkout (--before, e.g. a worktree of main before this work), if given.
 """
@@ -95,17 +96,45 @@ def child(case, batch, checkout):
     return json.loads(next(x for x in out.stdout.splitlines() if x.startswith("RESULT"))[6:])
 
 
+def focused(rows):
+    """The build-time table (chains: build s before / now, ms/step) and the small-step table (scenes:
+    ms/step before / now; the 16-element 3D rod's 10-step run against its 1000-step run)."""
+    def f(r, key, fmt):
+        v = r.get(key)
+        return "" if v in (None, "") else fmt.format(float(v))
+    lines = ["## Build time", "", "| bodies | build s before | build s now | ms/step before | ms/step now |",
+             "|---|---|---|---|---|"]
+    for r in rows:
+        if r["case"].startswith("chain of ") and r["case"].split()[2] != "4":
+            lines.append(f"| {r['case'].split()[2]} | {f(r, 'before:build_s', '{:.2f}')} | "
+                         f"{f(r, 'batch:build_s', '{:.2f}')} | {f(r, 'before:ms_per_step', '{:.3f}')} | "
+                         f"{f(r, 'batch:ms_per_step', '{:.3f}')} |")
+    lines += ["", "## Small steps", "", "| scene | steps | ms/step before | ms/step now |", "|---|---|---|---|"]
+    for r in rows:
+        if not r["case"].startswith("chain of "):
+            lines.append(f"| {r['case']} | {r['steps']} | {f(r, 'before:ms_per_step', '{:.3f}')} | "
+                         f"{f(r, 'batch:ms_per_step', '{:.3f}')} |")
+    return lines
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--before", help="another checkout to measure side by side (e.g. main before this work)")
     ap.add_argument("--quick", action="store_true", help="N up to 64, no 1000-body chain")
+    ap.add_argument("--tables", action="store_true", help="only write many_bodies.md again from many_bodies.csv")
     args = ap.parse_args()
     from report import write_report
+    if args.tables:
+        import csv
+        with open(os.path.join(HERE, "many_bodies.csv")) as fh:
+            rows = list(csv.DictReader(fh))
+        codes = [c for c in ("batch", "body by body", "before") if f"{c}:ms_per_step" in rows[0]]
+        return report(rows, codes, write_report, None)
     cases = [("chain", N, None, 20) for N in (1, 4, 16, 64, 256)]
     if not args.quick:
         cases.append(("chain", 1000, None, 5))
-    cases += [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-3d", 16, 10),
-              ("scene", "flying-spaghetti-3d", 16, 200)]
+    cases += [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-3d", 10, 200),
+              ("scene", "flying-spaghetti-3d", 16, 10), ("scene", "flying-spaghetti-3d", 16, 1000)]
     if args.quick:
         cases = [c for c in cases if not (c[0] == "chain" and c[1] > 64)]
     codes = [("batch", True, ROOT), ("body by body", False, ROOT)]
@@ -116,27 +145,38 @@ def main():
         row = {"case": f"chain of {case[1]} beams" if case[0] == "chain" else f"{case[1]} ({case[2]} el.)",
                "steps": case[3]}
         for label, batch, checkout in codes:
-            if label != "batch" and case[0] == "chain" and case[1] == 1000:
+            if label == "body by body" and case[0] == "chain" and case[1] == 1000:
                 continue   # (body by body: minutes per run)
             r = child(case, batch, checkout)
             for k, v in r.items():
                 row[f"{label}:{k}"] = v
             print(row["case"], label, r, flush=True)
         rows.append(row)
+    report(rows, [label for label, _, _ in codes], write_report, os.getloadavg()[0])
+
+
+def report(rows, codes, write_report, load):
+    """benchmarks/many_bodies.{csv,md}: every case side by side, then the two focused tables."""
+    def cell(key, fmt):
+        return lambda r: fmt.format(float(r[key])) if r.get(key) not in (None, "") else ""
     columns = [("case", "{}"), ("steps", "{}")]
-    for label, _, _ in codes:
-        columns += [(f"{label}:ms_per_step", lambda r, k=f"{label}:ms_per_step": f"{r[k]:.3f}" if k in r else "",
-                     f"{label} ms/step"),
-                    (f"{label}:build_s", lambda r, k=f"{label}:build_s": f"{r[k]:.2f}" if k in r else "",
-                     f"{label} build s")]
-    load = os.getloadavg()[0]
+    for label in codes:
+        columns += [(f"{label}:ms_per_step", cell(f"{label}:ms_per_step", "{:.3f}"), f"{label} ms/step"),
+                    (f"{label}:build_s", cell(f"{label}:build_s", "{:.2f}"), f"{label} build s")]
+    if load is None:   # (--tables: the note of the run that measured them)
+        with open(os.path.join(HERE, "many_bodies.md")) as fh:
+            kept = [x for x in fh.read().splitlines() if x.startswith("Load average")]
+        load_note = kept[0] if kept else ""
+    else:
+        load_note = f"Load average while this ran: {load:.1f} on 2 cores (the machine is shared: +-50 % " \
+                    "between runs is usual)."
     write_report("many_bodies", rows, columns, "Many bodies and small scenes: cost per step and build time",
                  intro=["Chain: N planar beams pinned end to end, 128 elements in total (N >= 128: one per beam), "
                         "h = 1 ms; scenes at their default h.  ms/step: CPU time of the process per step, the better "
                         "of two runs; build: CPU seconds of a build after the first of a process (JIT cache warm). "
-                        "Serial, one thread."],
-                 notes=[f"Load average while this ran: {load:.1f} on 2 cores (the machine is shared: +-50 % "
-                        "between runs is usual)."])
+                        "Serial, one thread.  batch: this checkout; body by body: this checkout with System(batch=False); "
+                        "before: the checkout given as --before (main before this work)."],
+                 notes=[load_note, "", *focused(rows)])
 
 
 if __name__ == "__main__":

@@ -53,8 +53,10 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
+ROD_FRICTION = "tests/models/test_rod_friction.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
+KINDS = "tests/core/test_kinds.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -601,6 +603,45 @@ MUTATIONS = [
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
 
+    # -- friction between rods; the contact pattern grown at once (issue 24) ----------------------
+    M("rodfriction-one-sided", "rodfem/core/bodycontact.py",
+      [("        return share[:, :, None] * f[:, None, :], np.einsum(\"nj,nj->n\", f, vt)",
+        "        return np.abs(share)[:, :, None] * f[:, None, :], np.einsum(\"nj,nj->n\", f, vt)")],
+      [f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]"],
+      "the friction force on both rods in the same direction (no reaction): momentum not conserved"),
+    M("rodfriction-not-dissipated", "rodfem/core/bodycontact.py",
+      [("                lost -= self.h * float(np.sum(power))", "                lost -= 0.0")],
+      [f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]",
+       f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "the friction's work not booked in `dissipated`: the balance breaks"),
+    M("rodfriction-end-velocity", "rodfem/core/bodycontact.py",
+      [("        rel = np.einsum(\"nk,nkj->nj\", share, 0.5 * (V0 + V1))", "        rel = np.einsum(\"nk,nkj->nj\", share, V1)")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block",
+       f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]"],
+      "the slip of the end-of-step velocities instead of the midpoint's: the friction's work is not h f . v_t,m"),
+    M("rodfriction-normal-slip", "rodfem/core/bodycontact.py",
+      [("        vt = rel - np.einsum(\"nj,nj->n\", rel, n)[:, None] * n", "        vt = rel")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "the normal part of the relative velocity left in the slip: the approach is resisted too"),
+    M("rodfriction-static-coefficient", "forms/contact.py",
+      [("        mu = mu_k + (mu_s - mu_k) * exp(-s2 / v_s ** 2)", "        mu = mu_s + 0.0 * mu_k * exp(-s2 / v_s ** 2)")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block",
+       f"{ROD_FRICTION}::test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above[above-threshold]"],
+      "the static coefficient while sliding (no Stribeck blend to mu_k)"),
+    M("rodfriction-no-velocity-jacobian", "rodfem/core/bodycontact.py",
+      [("                parts.append((self._free(p.indices(pairs, \"v\").reshape(-1, 12)), -dv))", "                pass")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "Newton's matrix without the friction's derivative in v_{n+1}: Newton stalls on the stiff damper"),
+    M("rodcontact-pattern-misses-friction", "rodfem/core/bodycontact.py",
+      [("                for kind in (\"q\", \"v\") if getattr(p.law, \"friction\", None) is not None and self.rubs else (\"q\",):",
+        "                for kind in (\"q\",):")],
+      [f"{ROD_FRICTION}::test_the_pattern_grown_at_once_gives_the_same_history"],
+      "the grown pattern without the friction's (v, v) entries (caught by the count of mallocs)"),
+    M("rodcontact-two-tree-reach", "rodfem/core/bodycontact.py",
+      [("        reach = float(np.max(radii)) + float(np.max(other_radii))", "        reach = float(np.max(radii))")],
+      [f"{ROD_FRICTION}::test_broad_phase_between_two_bodies_finds_every_overlap"],
+      "the two bodies' k-d trees searched within max r_a instead of max r_a + max r_b: overlaps missed"),
+
     # -- the capstan and the grasp (issue 24) --------------------------------------------------------
     M("capstan-friction-normal-unscaled", "forms/contact.py",
       [("        N = -z * norm\n", "        N = -z\n")],
@@ -1018,6 +1059,24 @@ MUTATIONS = [
       [('n, a = p["n"], p["L"] / (p["n"] + 1) * (1 + p["prestretch"])', 'n, a = p["n"], p["L"] / (p["n"] + 1)')],
       [MANY + "::test_net_static_sag_against_numpy_newton"],
       "the edge nodes placed without the pre-stretch (the strings start slack)"),
+    # -- bodies of one kind sharing mesh and kernels (rodfem/core/kinds.py) ---------------------------
+    M("kind-template-load-values", "rodfem/core/kinds.py",
+      [("    pairs += [(a.constant, b.constant) for a, b in zip(template.loads, body.loads)]",
+        "    pairs += [(a.constant, a.constant) for a, b in zip(template.loads, body.loads)]")],
+      [KINDS + "::test_links_of_one_kind_on_different_meshes"],
+      "the other bodies of a kind read the first body's load values"),
+    M("kind-template-objects", "rodfem/core/kinds.py",
+      [("    swap = counterparts(template, body)\n", "    swap = counterparts(template, template)\n")],
+      [KINDS + "::test_equal_links_share_one_mesh_and_kernels"],
+      "the other bodies of a kind assembled on the first body's states, step and loads"),
+    M("partial-lu-kept-by-size", "rodfem/la/partial_lu.py",
+      [("    for a in (ki, kj, src, where, postpone):", "    for a in ():")],
+      ["tests/la/test_partial_lu_reuse.py"],
+      "the partial LU's kept order and factor pattern found by the matrix's size, not its pattern"),
+    M("joint-rank-groups-split", "rodfem/core/system.py",
+      [("                parent[root(i)] = root(owner[g])", "                pass")],
+      [KINDS + "::test_redundant_joint_in_a_long_chain_is_refused"],
+      "the joints' rank check treats joints sharing velocities as independent (a redundant pin passes)"),
     # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
     M("stability-sign", "rodfem/la/pencil.py",
       [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",

@@ -25,14 +25,14 @@ its friction) is a port with an energy and a dissipation of its own, terminated 
 so that H_{n+1} - H_n + dissipated = supplied holds with it exactly when its residual does the
 work energy_{n+1} - energy_n - dissipated on the step.
 """
+import functools
+
 import numpy as np
 import ufl
 from dolfinx import fem
-from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from rodfem.common.limits import check_elements
-from rodfem.core.integrators import Step
+from rodfem.core.integrators import RULES, Step
 from rodfem.core.ports import ENDS
 from rodfem.core.spaces import StateSpace, dofs_per_element
 from rodfem.fem.jit import compiles
@@ -48,7 +48,9 @@ class Body:
 
     @compiles  # the elements and the initial values' expressions: under the JIT cache lock
     def __init__(self, model, length=1.0, n_elements=1, loads=(), supports=(), initial=None,
-                 integrator="midpoint", comm=MPI.COMM_WORLD, name="", contacts=()):
+                 integrator="midpoint", comm=MPI.COMM_WORLD, name="", contacts=(), shared=None):
+        """shared: a rodfem.core.kinds.Meshes of the system, whose bodies of the same number of cells,
+        length and fields then share one mesh and one state space (None: a mesh of its own)."""
         self.model, self.name = model, name
         self.rigid = bool(getattr(model, "point", False))
         if self.rigid:
@@ -56,28 +58,35 @@ class Body:
             if supports:
                 raise ValueError(f"body {name or model}: a rigid body has no ends to support; "
                                  "fix it with a joint to GROUND")
+        if shared is None:
+            from rodfem.core.kinds import Meshes
+            shared = Meshes()
+        self.shared = shared
         self.length = float(length)
-        self.n_elements = 1 if self.rigid else check_elements(n_elements, dofs_per_element(model.fields), comm)
+        self.n_elements = 1 if self.rigid else shared.elements(n_elements, dofs_per_element(model.fields), comm)
         self.loads, self.supports, self.integrator = list(loads), list(supports), integrator
         self.contacts = list(contacts)
-        self.mesh = dmesh.create_interval(comm, self.n_elements, [0.0, self.length])
-        tdim = self.mesh.topology.dim   # cell-to-cell: locate_dofs_topological on cells needs it (0.9)
-        self.mesh.topology.create_connectivity(tdim, tdim)
+        if integrator not in RULES:
+            raise ValueError(f"integrator must be one of {', '.join(RULES)} (got {integrator!r})")
+        self.mesh, self.facets, self.end_tags = shared.mesh(comm, self.n_elements, self.length)
         self.comm = self.mesh.comm
-        self.space = S = (RigidSpace if self.rigid else StateSpace)(self.mesh, model.fields)
+        self.space = S = shared.space(self.mesh, RigidSpace if self.rigid else StateSpace, model.fields)
         self.x0, self.x1, self.state0 = (fem.Function(S.V) for _ in range(3))
         self.h = fem.Constant(self.mesh, 1.0)
 
-        self._tag_ends()
         self.dx = ufl.Measure("dx", domain=self.mesh, metadata={"quadrature_degree": model.quadrature_degree})
         self.ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.end_tags)
         self._set_initial(initial or {})
-        self.step = Step(S.split(self.x0), S.split(self.x1), self.h, integrator)
         for load in self.loads:
             load.bind(self.mesh, S)
         self.bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]
         for contact in self.contacts:
             contact.bind(self)
+
+    @functools.cached_property
+    def step(self):
+        """The UFL view of a step (rodfem/core/integrators.py), made when a form is first built."""
+        return Step(self.space.split(self.x0), self.space.split(self.x1), self.h, self.integrator)
 
     # -- the forms of one step (UFL, not compiled) ------------------------------
     def residual_form(self):
@@ -144,19 +153,6 @@ class Body:
         return out
 
     # -- set-up -------------------------------------------------------------
-    def _tag_ends(self):
-        m = self.mesh
-        m.topology.create_connectivity(0, 1)
-        self.facets = {
-            "left": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], 0.0)),
-            "right": dmesh.locate_entities_boundary(m, 0, lambda x: np.isclose(x[0], self.length)),
-        }
-        idx = np.concatenate([self.facets["left"], self.facets["right"]]).astype(np.int32)
-        vals = np.concatenate([np.full(len(self.facets["left"]), ENDS["left"]),
-                               np.full(len(self.facets["right"]), ENDS["right"])]).astype(np.int32)
-        order = np.argsort(idx)
-        self.end_tags = dmesh.meshtags(m, 0, idx[order], vals[order])
-
     def _set_initial(self, initial):
         S = self.space
         unknown = set(initial) - set(S.names)
@@ -165,13 +161,11 @@ class Body:
         for name, value in initial.items():
             if not isinstance(value, ufl.core.expr.Expr):
                 S.assign(self.x0, name, value)
-        X0 = S.split(self.x0)
         for name, value in initial.items():
             if isinstance(value, ufl.core.expr.Expr):
                 S.assign(self.x0, name, value)
-        for name, expr in self.model.compatible_strains(X0).items():
-            if name not in initial:
-                S.assign(self.x0, name, expr)
+        for name, expr in self.shared.strains(self, initial):
+            S.assign(self.x0, name, expr)
         self.x1.x.array[:] = self.x0.x.array
         self.state0.x.array[:] = self.x0.x.array
 

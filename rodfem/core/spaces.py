@@ -46,7 +46,7 @@ class StateSpace:
         self.index = {f.name: i for i, f in enumerate(self.fields)}
         els = [compat.element(f.family, mesh, f.degree, f.shape) for f in self.fields]
         self.V = compat.functionspace(mesh, compat.mixed_element(els))
-        self._collapsed = {}
+        self._collapsed, self._scratch = {}, {}
 
     @property
     def names(self):
@@ -93,27 +93,35 @@ class StateSpace:
     def assign(self, u, name, value):
         """Set component `name` of u by interpolation of `value`.
 
-        `value` is a callable x -> array (x of shape (3, npoints), x[0] = s) or
-        a UFL expression (interpolated at the element's points).
+        `value` is a callable x -> array (x of shape (3, npoints), x[0] = s), a constant, a
+        UFL expression (interpolated at the element's points) or one compiled (`expression`).
         """
         Vi, dofs = self.collapse(name)
-        fi = fem.Function(Vi)
-        if not callable(value) and not isinstance(value, ufl.core.expr.Expr):
-            value = self._constant(name, value)
+        if name not in self._scratch:   # (a Function of V_i to interpolate into, one per field)
+            self._scratch[name] = fem.Function(Vi)
+        fi = self._scratch[name]
         if isinstance(value, ufl.core.expr.Expr):
-            if value.ufl_shape != tuple(self.field(name).shape):
-                raise InputError(f"initial value of field '{name}': shape {value.ufl_shape}, "
-                                 f"the field has shape {tuple(self.field(name).shape)}")
-            fi.interpolate(fem.Expression(value, Vi.element.interpolation_points()))
+            value = self.expression(name, value)
+        elif not callable(value) and not isinstance(value, fem.Expression):
+            value = self._constant(name, value)
+        if isinstance(value, fem.Expression):
+            compat.interpolate(fi, value)
         else:
             try:
-                fi.interpolate(value)
+                compat.interpolate(fi, value)
             except RuntimeError as e:  # DOLFINx names neither the field nor the shape it wanted
                 want = f"({self.field(name).size}, npoints)" if self.field(name).shape else "(npoints,)"
                 raise InputError(f"initial value of field '{name}': a function of x (shape (3, npoints)) "
                                  f"returning shape {want} is needed ({e})") from None
         u.x.array[dofs] = fi.x.array
         u.x.scatter_forward()
+
+    def expression(self, name, value):
+        """The UFL expression `value` compiled for interpolation into field `name` (a fem.Expression)."""
+        if value.ufl_shape != tuple(self.field(name).shape):
+            raise InputError(f"initial value of field '{name}': shape {value.ufl_shape}, "
+                             f"the field has shape {tuple(self.field(name).shape)}")
+        return fem.Expression(value, self.collapse(name)[0].element.interpolation_points())
 
     def _constant(self, name, value):
         """A constant initial value (a number, or an array of the field's shape) as a function of x."""

@@ -34,6 +34,7 @@ from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, Point
+from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
@@ -78,16 +79,20 @@ class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
     batch = True   # the default: bodies of the same compiled forms assembled together (serial)
+    share = True   # the default: bodies of one kind share their mesh and compiled forms (rodfem/core/kinds.py)
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None, batch: Optional[bool] = None):
+                 momentum: Optional[bool] = None, batch: Optional[bool] = None, share: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts.  batch: bodies of the same compiled forms assembled together
-        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`."""
+        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`.  share: bodies of one
+        kind share their mesh, state space and compiled forms (rodfem/core/kinds.py); None: `System.share`."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
         if batch is not None:
             self.batch = batch
+        if share is not None:
+            self.share = share
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
@@ -114,7 +119,10 @@ class System:
         if self._ready:
             raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
                                   "add every body before the first run")
-        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts)
+        if not hasattr(self, "_meshes"):
+            self._meshes = Meshes() if self.share else None
+        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts,
+                    shared=self._meshes)
         ref = BodyRef(name, body)
         self.bodies[name] = ref
         return ref
@@ -194,7 +202,11 @@ class System:
             raise ConstraintError(f"{what} needs at least one body")
 
     def _check_name(self, name):
-        if any(j.name == name for j in self.joints + self.components):
+        names, nj, nc = getattr(self, "_names", (set(), 0, 0))
+        if (nj, nc) != (len(self.joints), len(self.components)):   # (the names of those added since)
+            names.update(j.name for j in self.joints[nj:] + self.components[nc:])
+            self._names = (names, len(self.joints), len(self.components))
+        if name in names:
             raise ConstraintError(f"joint or component name {name!r} is used twice")
 
     def marker(self, name: str, point: Point):
@@ -218,30 +230,33 @@ class System:
         # maps when unsupported, its ports' columns); a System's bodies their total momentum maps,
         # and the system its markers, joints and recorders
         self.single = not self.named_bodies
-        forms = {}
-        for ref in refs:
-            for key, f in ref.body.forms().items():
-                if not key.startswith("obs:") or self.single:
-                    forms[(ref.name, key)] = f
         free = not any(r.body.supports for r in refs) and not any(
             j.a.body is None or j.b.body is None for j in self.joints + self.components)
-        if not self.single and (self.momentum or (self.momentum is None and free)):   # total momentum maps
-            for ref in refs:
-                X1 = ref.body.space.split(ref.body.x1)
-                for k, f in ref.body.momentum_forms(X1).items():
-                    forms[(ref.name, "obs:" + k)] = f
-        if not self.single:   # the interactions' columns, body by body
-            for ref in refs:
-                X1 = ref.body.space.split(ref.body.x1)
-                for k, f in ref.body.interaction_forms(X1).items():
-                    forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
+        momentum = not self.single and (self.momentum or (self.momentum is None and free))
+        templates = self._templates(refs)   # body name -> the first body of its kind (rodfem/core/kinds.py)
+        forms = self._forms([r for r in refs if r.name not in templates], momentum)
+        kinds = {t.name: t for t in templates.values()}
+        alone = {n for n, t in kinds.items() if not shareable(t.body, {k: f for (m, k), f in forms.items() if m == n})}
+        if alone:   # (a kind whose forms hold objects neither the bodies' nor the model's: body by body)
+            forms.update(self._forms([r for r in refs if templates.get(r.name, r).name in alone
+                                      and r.name in templates], momentum))
+            templates = {n: t for n, t in templates.items() if t.name not in alone}
+        self.kinds = {n: t.name for n, t in templates.items()}   # body -> the body whose compiled forms it shares
         size = 0
         for j in self.joints:
             j.offset = size
             size += self._bind(j)
         for c in self.components:
             self._bind_component(c)
-        self.compiled = compile_forms(forms)
+        compiled = compile_forms(forms)
+        keys = {}
+        for n, k in forms:
+            keys.setdefault(n, []).append(k)
+        for name, t in templates.items():   # the other bodies of a kind: the template's kernels on their objects
+            own = {k: forms[(t.name, k)] for k in keys[t.name]}
+            twins = twin_forms(t.body, self.bodies[name].body, own, {k: compiled[(t.name, k)] for k in own})
+            compiled.update({(name, k): f for k, f in twins.items()})
+        self.compiled = {(r.name, k): compiled[(r.name, k)] for r in refs for k in keys[templates.get(r.name, r).name]}
         self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
         self.columns = list(dict.fromkeys(self.columns))
         if not self.single:
@@ -275,6 +290,40 @@ class System:
         self._loads = [load for r in refs for load in r.body.loads]
         self._ready = True
         return self
+
+    def _templates(self, refs):
+        """Body name -> the first body of its kind (rodfem/core/kinds.py), for the bodies whose compiled
+        forms are their template's on their own objects (not a Problem's body, not with `share` False)."""
+        out, first = {}, {}
+        if self.single or not self.share:
+            return out
+        for ref in refs:
+            key = kind(ref.body)
+            if key is None:
+                continue
+            if key not in first:
+                first[key] = ref
+            else:
+                out[ref.name] = first[key]
+        return out
+
+    def _forms(self, refs, momentum):
+        """The UFL forms of the bodies `refs`: {(body name, key): form} (rodfem/core/body.py's `forms`;
+        a System's bodies: their momentum maps if `momentum`, and their interactions' columns)."""
+        forms = {}
+        for ref in refs:
+            for key, f in ref.body.forms().items():
+                if not key.startswith("obs:") or self.single:
+                    forms[(ref.name, key)] = f
+            if self.single:
+                continue
+            X1 = ref.body.space.split(ref.body.x1)
+            if momentum:   # total momentum maps
+                for k, f in ref.body.momentum_forms(X1).items():
+                    forms[(ref.name, "obs:" + k)] = f
+            for k, f in ref.body.interaction_forms(X1).items():   # the interactions' columns, body by body
+                forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
+        return forms
 
     def set_newton_options(self, options: Optional[dict]):
         """A new Newton with these options (the matrix and assembly are kept)."""
@@ -454,7 +503,7 @@ class System:
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
         if self.body_contacts is not None:
-            self.body_contacts.step(self.X0)
+            self.body_contacts.step(self.X0, self.dt)
         return self.newton.solve(step, t)
 
     def accept(self):
@@ -471,7 +520,17 @@ class System:
         """The sum over the bodies of the functional `key` at their states x1 (summed in the bodies' order)."""
         X = self._x1_values
         self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
-        return self.comm.allreduce(sum(self._functionals(key).values(X)), op=MPI.SUM)
+        total = sum(self._functionals(key).values(X))
+        return total if self.comm.size == 1 else self.comm.allreduce(total, op=MPI.SUM)
+
+    def _sums(self, keys):
+        """{key: _sum(key)} for several functionals: the bodies' states read once, one reduction."""
+        X = self._x1_values
+        self._segments("x1").get(X)
+        totals = [sum(self._functionals(k).values(X)) for k in keys]
+        if self.comm.size > 1 and totals:
+            totals = self.comm.allreduce(np.array(totals), op=MPI.SUM).tolist()
+        return dict(zip(keys, totals))
 
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
@@ -503,22 +562,25 @@ class System:
         """True if a body (rodfem/core/model.py: `dissipation`) or a component (a damper) dissipates."""
         self.build()
         return (any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
-                or any(c.dissipative for c in self.components))
+                or any(c.dissipative for c in self.components)
+                or (self.body_contacts is not None and self.body_contacts.rubs))
 
     def dissipated_energy(self) -> float:
-        """h d_n of the last step: the sum over the dissipating bodies and dampers."""
-        return self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
+        """h d_n of the last step: the sum over the dissipating bodies, dampers and the contacts' friction."""
+        return (self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
+                + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
 
     def observe(self) -> dict:
         """The history's columns of the state x_{n+1}."""
         self.build()
         obs = {}
+        columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
         if self.single:
-            obs.update({k[4:]: self._sum(k) for k in self.columns})
+            obs.update(columns)
         if self.points is not None:
             obs.update(self.points.observe(self.X1))
         if not self.single:
-            obs.update({k[4:]: self._sum(k) for k in self.columns})
+            obs.update(columns)
         if self.body_contacts is not None:
             obs.update(self.body_contacts.observe(self.X1))
         for name, body in self._monitored:   # (the bodies with interactions)
@@ -650,22 +712,27 @@ class PointIndex:
         bad = None
         vals = self.values(X0)
         if self.comm.rank == 0:
-            cols = sorted({int(g) for j in self.joints for g in j.v_index if int(g) not in self.fixed})
-            where = {g: k for k, g in enumerate(cols)}
-            rows = []
-            for j in self.joints:
+            free = [[int(g) for g in j.v_index if int(g) not in self.fixed] for j in self.joints]
+            blocks = []
+            for j, cols in zip(self.joints, free):
                 G = np.einsum("kij,j->ki", j.Q, vals[j.q_at]) + j.c
-                block = np.zeros((j.size, len(cols)))
-                for k, g in enumerate(j.v_index):
-                    if int(g) in where:
-                        block[:, where[int(g)]] += G[:, k]
-                rows.append(block)
-            G = np.vstack(rows)
-            sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
-            rank = int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
-            if rank < G.shape[0]:
+                blocks.append(G[:, [k for k, g in enumerate(j.v_index) if int(g) not in self.fixed]])
+            rank, rows = 0, 0
+            for members in coupled(free):   # (G is block diagonal over the joints sharing no velocity)
+                cols = sorted({g for m in members for g in free[m]})
+                where = {g: k for k, g in enumerate(cols)}
+                G = np.zeros((sum(self.joints[m].size for m in members), len(cols)))
+                r = 0
+                for m in members:
+                    for k, g in enumerate(free[m]):
+                        G[r:r + self.joints[m].size, where[g]] += blocks[m][:, k]
+                    r += self.joints[m].size
+                sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
+                rank += int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
+                rows += G.shape[0]
+            if rank < rows:
                 names = ", ".join(j.name for j in self.joints)
-                bad = (f"the joints ({names}) impose {G.shape[0]} conditions of which only {rank} are "
+                bad = (f"the joints ({names}) impose {rows} conditions of which only {rank} are "
                        "independent (a redundant or inconsistent set, e.g. a joint at a supported end): "
                        "remove the redundant ones")
         bad = self.comm.bcast(bad, root=0)
@@ -697,6 +764,29 @@ class PointIndex:
         return self.comm.bcast(obs, root=0)
 
 
+def coupled(columns):
+    """The groups of items that share columns, directly or through others (the connected components of
+    the graph item - column; `columns[i]`: the columns of item i), each a sorted list of items."""
+    parent = list(range(len(columns)))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+    owner = {}
+    for i, cols in enumerate(columns):
+        for g in cols:
+            if g in owner:
+                parent[root(i)] = root(owner[g])
+            else:
+                owner[g] = i
+    groups = {}
+    for i in range(len(columns)):
+        groups.setdefault(root(i), []).append(i)
+    return list(groups.values())
+
+
 class Couplings:
     """Several couplings of rodfem/fem/assembly.py as one (the joints' rows and the bodies' contacts)."""
 
@@ -717,6 +807,11 @@ class Couplings:
     def jacobian(self, X, A):
         for p in self.parts:
             p.jacobian(X, A)
+
+    def grow(self):
+        out = [g() for g in (getattr(p, "grow", None) for p in self.parts) if g is not None]
+        out = [e for e in out if e is not None]
+        return [x for e in out for x in e] if out else None
 
 
 class JointRows:
@@ -855,16 +950,24 @@ def point_coordinates(point, comm):
         found = comm.allreduce(len(entities), op=MPI.SUM)
         if not found:
             raise ConstraintError(f"point {point.describe()} at s = {point.s:g} is not a node of {point.body.name}")
-    q_dofs, v_dofs, layout = [], [], []
-    for q, v in model.kinematics.items():
-        n = S.field(q).size
-        layout.append((q, n))
-        for name, out in ((q, q_dofs), (v, v_dofs)):
-            sub = S.sub(name)
-            for c in range(n):
-                s = sub.sub(c) if S.field(name).shape else sub
-                dofs = fem.locate_dofs_topological(s, dim, entities)
-                out.append(int(dofs[0]) if len(dofs) else -1)
+    key = (point.where, tuple(model.kinematics.items())) if point.where != "node" else None
+    known = S.__dict__.setdefault("_point_dofs", {})   # (bodies sharing a state space: found once per end)
+    found = known.get(key) if key is not None else None
+    if found is None:
+        q_dofs, v_dofs, layout = [], [], []
+        for q, v in model.kinematics.items():
+            n = S.field(q).size
+            layout.append((q, n))
+            for name, out in ((q, q_dofs), (v, v_dofs)):
+                sub = S.sub(name)
+                for c in range(n):
+                    s = sub.sub(c) if S.field(name).shape else sub
+                    dofs = fem.locate_dofs_topological(s, dim, entities)
+                    out.append(int(dofs[0]) if len(dofs) else -1)
+        found = (q_dofs, v_dofs, layout)
+        if key is not None:
+            known[key] = found
+    q_dofs, v_dofs, layout = found
     pc = PointCoordinates(point, np.array(q_dofs), np.array(v_dofs), layout)
     # q(0) from the owning rank
     nloc = S.V.dofmap.index_map.size_local * S.V.dofmap.index_map_bs

@@ -61,9 +61,9 @@ class BlockLayout:
     def create_vector(self):
         return PETSc.Vec().createMPI((self.size_local, self.size_global), comm=self.comm)
 
-    def create_matrix(self, entries):
-        """An AIJ matrix with the (rows, cols) pairs of `entries` (global; a rank may list rows of
-        another) and the whole diagonal; new entries may still be inserted later."""
+    def _pattern(self, entries, A=None):
+        """The CSR structure (indptr, cols) of this rank's rows holding the (rows, cols) pairs of `entries`
+        (global; a rank may list rows of another), the whole diagonal and A's present pattern (collective)."""
         N = self.size_global
         keys = [np.asarray(r, np.int64) * N + np.asarray(c, np.int64) for r, c in entries]
         key = np.concatenate(keys) if keys else np.zeros(0, np.int64)
@@ -71,14 +71,35 @@ class BlockLayout:
             owner = self.owner(key // N)
             key = np.concatenate(self.comm.alltoall([key[owner == p] for p in range(self.comm.size)]))
         diagonal = self.start + np.arange(self.size_local, dtype=np.int64)
-        key = np.unique(np.concatenate([key, diagonal * N + diagonal]))
+        if A is None:
+            key = np.unique(np.concatenate([key, diagonal * N + diagonal]))
+        else:   # A's keys are sorted (CSR: rows in order, columns sorted in each): merge the missing ones in
+            indptr, cols, _ = A.getValuesCSR()
+            rows = self.start + np.repeat(np.arange(len(indptr) - 1, dtype=np.int64), np.diff(indptr))
+            present = rows * N + np.asarray(cols, np.int64)
+            key = np.unique(key)
+            at = np.searchsorted(present, key)
+            missing = (at >= len(present)) | (present[np.minimum(at, len(present) - 1)] != key)
+            key = np.insert(present, at[missing], key[missing])
         rows, cols = np.divmod(key, N)
         indptr = np.concatenate([[0], np.cumsum(np.bincount(rows - self.start, minlength=self.size_local))])
-        A = PETSc.Mat().createAIJ(((self.size_local, N), (self.size_local, N)),
-                                  csr=(indptr.astype(PETSc.IntType), cols.astype(PETSc.IntType)), comm=self.comm)
+        return indptr.astype(PETSc.IntType), cols.astype(PETSc.IntType)
+
+    def create_matrix(self, entries):
+        """An AIJ matrix with the (rows, cols) pairs of `entries` (global; a rank may list rows of
+        another) and the whole diagonal; new entries may still be inserted later."""
+        N = self.size_global
+        A = PETSc.Mat().createAIJ(((self.size_local, N), (self.size_local, N)), csr=self._pattern(entries), comm=self.comm)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)   # the pattern may grow
         A.assemble()
         return A
+
+    def extend_matrix(self, A, entries):
+        """Add the (rows, cols) pairs of `entries` to A's pattern in one re-preallocation (collective; A's
+        values are zeroed): many new entries at once without PETSc reallocating the matrix for each."""
+        A.setPreallocationCSR(self._pattern(entries, A))
+        A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        A.assemble()
 
 
 class BodyBlock:
@@ -113,9 +134,9 @@ class BodyBlock:
         rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
         return self.l2g[rows], self._column(cols)
 
-    def attach(self, A):
+    def attach(self, A, shared=None):
         if self.fast:
-            self.fast.attach(A, self.lo, self.l2g)
+            self.fast.attach(A, self.lo, self.l2g, shared)
 
     # -- the state and the residual ---------------------------------------------------------
     def set_state(self, X):
@@ -152,9 +173,9 @@ class BodyBlock:
                         addv=PETSc.InsertMode.ADD_VALUES)
         return True
 
-    def restructure(self):
+    def restructure(self, shared=None):
         if self.fast:
-            self.fast.restructure()
+            self.fast.restructure(shared)
 
 
 class BlockAssembler:
@@ -162,7 +183,8 @@ class BlockAssembler:
 
     coupling: None, or an object with ``entries()`` -> [(rows, cols)] global index arrays,
     ``residual(X, b)`` and ``jacobian(X, A)`` adding its terms (global indices, any rank), and
-    ``update(X)`` called before either with the iterate.
+    ``update(X)`` called before either with the iterate; optionally ``grow()`` (collective), called
+    before each Jacobian: None, or [(rows, cols)] to add to the pattern first (`extend_matrix`).
     """
 
     def __init__(self, layout, blocks, coupling=None, batch=False):
@@ -229,6 +251,13 @@ class BlockAssembler:
 
     def jacobian(self, xin, A):
         X = self.vector.getArray(readonly=True)   # the iterate of the last residual (SNES: the same x)
+        grow = getattr(self.coupling, "grow", None)
+        extra = grow() if grow is not None else None   # entries the coupling needs that the pattern lacks
+        if extra is not None:
+            self.layout.extend_matrix(A, extra)
+            for u in self.units:
+                u.restructure()
+            self._state = self._nonzero_state(A)
         while True:
             A.zeroEntries()
             if all(u.add_jacobian(A, X) for u in self.batches) and all(blk.add_jacobian(A) for blk in self.single):

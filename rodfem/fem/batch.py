@@ -134,14 +134,16 @@ class FormBatch:
             self.nd, self.dofs = 0, np.zeros(1, np.int32)
         # the other coefficients: their Functions, and where their values sit in S = (X, others)
         self.others, self._other_at, self._end = [], {}, self.size
+        self._dofs_of = {}
         per_body = [self._gather(b, f, iterates[b], offsets[b]) for b, f in enumerate(self.forms)]
         self.S = np.zeros(self._end)
         # the entities of each integral, body by body, and their coefficients' gather indices
         self.integrals = []
-        for k, (itype, i, address, _, facets) in enumerate(form_integrals(first)):
+        entities = [form_integrals(f) for f in self.forms]
+        for k, (itype, i, address, _, facets) in enumerate(entities[0]):
             cells, fac, body, index = [], [], [], []
             for b, f in enumerate(self.forms):
-                *_, c_b, f_b = form_integrals(f)[k]
+                *_, c_b, f_b = entities[b][k]
                 cells.append(c_b + self.cell_start[b])
                 if f_b is not None:
                     fac.append(f_b)
@@ -164,8 +166,11 @@ class FormBatch:
         cols = []
         ncell = self.cell_start[b + 1] - self.cell_start[b]
         for c in compat.cpp_form(form).coefficients:
-            dofs, bs = _cell_dofs(c.function_space)
-            slots = (bs * dofs[:, :, None] + np.arange(bs)[None, None, :]).reshape(len(dofs), -1)
+            V = c.function_space
+            if id(V) not in self._dofs_of:   # (bodies of one kind share their spaces: computed once)
+                dofs, bs = _cell_dofs(V)
+                self._dofs_of[id(V)] = (V, (bs * dofs[:, :, None] + np.arange(bs)[None, None, :]).reshape(len(dofs), -1))
+            slots = self._dofs_of[id(V)][1]
             if np.shares_memory(c.x.array, iterate.x.array):
                 base = offset
             else:
@@ -330,20 +335,22 @@ class BlockBatch:
         return (np.concatenate([r for r, _ in out]), np.concatenate([c for _, c in out]))
 
     def attach(self, A):
+        from rodfem.fem.fastassembly import structure
+        shared = structure(A)   # (read once for all the bodies)
         for blk in self.blocks:
-            blk.attach(A)
+            blk.attach(A, shared)
         self.A = A
-        self._structure()
+        self._structure(shared)
 
     def restructure(self):
+        from rodfem.fem.fastassembly import structure
+        shared = structure(self.A)
         for blk in self.blocks:
-            blk.restructure()
-        self._structure()
+            blk.restructure(shared)
+        self._structure(shared)
 
-    def _structure(self):
-        from rodfem.fem.fastassembly import _Block
-        from rodfem.fem.petsc_raw import blocks
-        self.diag = _Block(blocks(self.A)[0])
+    def _structure(self, shared):
+        self.diag = shared[0]
         self.bc_diag = np.concatenate([blk.fast.bc_diag for blk in self.blocks])
 
     def set_state(self, X):

@@ -275,6 +275,12 @@ def form_integrals(form):
     return out
 
 
+def structure(A):
+    """(diagonal block, off-diagonal block or None, its global columns) of A's structure, copied once."""
+    Ad, Ao, garray = petsc_raw.blocks(A)
+    return _Block(Ad), (_Block(Ao) if Ao is not None else None), garray
+
+
 class _Block:
     """A sequential AIJ block: its structure (copied once) and its values (open/close)."""
 
@@ -357,23 +363,22 @@ class FastJacobian:
             cols.append(c[keep])
         return np.concatenate(rows), np.concatenate(cols)
 
-    def attach(self, A, row_offset, l2g):
+    def attach(self, A, row_offset, l2g, shared=None):
         """Assemble into A from now on: this form's owned rows start at local row `row_offset` of A,
-        l2g maps its local dofs (owned and ghosts) to A's global indices."""
+        l2g maps its local dofs (owned and ghosts) to A's global indices.  (`shared`: A's
+        `structure(A)`, read once for many forms.)"""
         self.A, self.roff = A, int(row_offset)
         self.l2g = np.asarray(l2g).astype(PETSc.IntType)
-        self._structure()
+        self._structure(shared)
 
-    def restructure(self):
+    def restructure(self, shared=None):
         """Re-read A's structure after entries outside it were inserted."""
-        self._structure()
+        self._structure(shared)
 
-    def _structure(self):
+    def _structure(self, shared=None):
         """The CSR structure of A's blocks, where the columns of the ghost dofs are, the diagonal
         positions of the Dirichlet rows, a buffer for the entries that go through MatSetValues."""
-        Ad, Ao, garray = petsc_raw.blocks(self.A)
-        self.diag = _Block(Ad)
-        self.off = _Block(Ao) if Ao is not None else None
+        self.diag, self.off, garray = shared or structure(self.A)
         self.ghost_col = np.zeros(1, np.int32)
         if self.off is not None:
             ghosts = np.asarray(self.l2g[self.nown:], dtype=np.int64)
