@@ -62,6 +62,7 @@ KINDS = "tests/core/test_kinds.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
+MANY = "tests/models/test_many_scenes.py"
 SIMULATOR = "tests/app/test_simulator.py"
 REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
@@ -1096,6 +1097,40 @@ MUTATIONS = [
       [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
+    # -- the many-part scenes (issue 26) ---------------------------------------------------------
+    M("chain-pivot-at-the-centre", "demos/chain_1000.py",
+      [('links[0].point((-0.5 * l, 0.0, 0.0)), name="pivot")', 'links[0].point((0.0, 0.0, 0.0)), name="pivot")')],
+      [MANY + "::test_chain_converges_to_the_minimal_coordinates_pendulum"],
+      "the chain's first link turns about its centre instead of its end"),
+    M("rod-inertia-about-the-end", "demos/_multibody.py",
+      [("J = m * (l * l / 12.0 + r * r / 4.0)", "J = m * (l * l / 3.0 + r * r / 4.0)")],
+      [MANY + "::test_chain_converges_to_the_minimal_coordinates_pendulum"],
+      "the links' moment of inertia about an end instead of the centre"),
+    M("prism-vertical-cables-wrong-way", "demos/tensegrity.py",
+      [("cables += [((j, i), (j + 1, (i - 1) % 3), np.sqrt(3.0))", "cables += [((j, i), (j + 1, (i + 1) % 3), np.sqrt(3.0))")],
+      [MANY + "::test_prism_self_stress_exists_at_150_degrees_with_ratios_1_sqrt3",
+       MANY + "::test_prism_rests_in_its_pre_stressed_equilibrium"],
+      "the vertical cables to top node i + 1 (the mirror topology): no self-stress at 150 deg"),
+    M("prism-vertical-force-ratio", "demos/tensegrity.py",
+      [("(j + 1, (i - 1) % 3), np.sqrt(3.0))", "(j + 1, (i - 1) % 3), 1.5)")],
+      [MANY + "::test_prism_rests_in_its_pre_stressed_equilibrium"],
+      "the vertical cables pre-stressed with force density 1.5 q_h instead of sqrt(3) q_h"),
+    M("prism-shared-triangle-single", "demos/tensegrity.py",
+      [("1.0 if j in (0, S) else 2.0", "1.0")],
+      [MANY + "::test_prism_rests_in_its_pre_stressed_equilibrium"],
+      "a tower's shared triangles carry the force density of one prism, not two"),
+    M("prism-push-never-ends", "demos/tensegrity.py",
+      [("np.array([0.0, f if t < tp else 0.0, 0.0])", "np.array([0.0, f, 0.0])")],
+      [MANY + "::test_free_prism_energy_balance_and_momentum"],
+      "the push acts for the whole run: the momentum is not the push's impulse"),
+    M("net-crossing-half-joined", "demos/cable_net.py",
+      [("for k, pt in enumerate(points[1:], 1):", "for k, pt in enumerate(points[2:], 2):")],
+      [MANY + "::test_net_static_sag_against_numpy_newton"],
+      "one string end at each crossing left unjoined"),
+    M("net-pins-unstretched", "demos/cable_net.py",
+      [('n, a = p["n"], p["L"] / (p["n"] + 1) * (1 + p["prestretch"])', 'n, a = p["n"], p["L"] / (p["n"] + 1)')],
+      [MANY + "::test_net_static_sag_against_numpy_newton"],
+      "the edge nodes placed without the pre-stretch (the strings start slack)"),
     # -- bodies of one kind sharing mesh and kernels (rodfem/core/kinds.py) ---------------------------
     M("kind-template-load-values", "rodfem/core/kinds.py",
       [("    pairs += [(a.constant, b.constant) for a, b in zip(template.loads, body.loads)]",

@@ -29,3 +29,10 @@ def orthonormality(body, state="x1"):
     """max |R^T R - I| over the nodes of a director-based body (rigid or rod), every rank."""
     R = np.stack([nodal(body, d, state)[1] for d in DIRECTORS], axis=2)
     return float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3))))
+
+
+def rod_inertia(m, l, r):
+    """Principal moments (J_1, J_2, J_3) of a uniform solid cylinder of mass m, length l, radius r along d1:
+    J_1 = m r^2 / 2, J_2 = J_3 = m (l^2 / 12 + r^2 / 4)."""
+    J = m * (l * l / 12.0 + r * r / 4.0)
+    return np.array([0.5 * m * r * r, J, J])
