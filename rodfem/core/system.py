@@ -323,6 +323,7 @@ class System:
             if p.owner == self.comm.rank and error is None:
                 try:
                     ref.body = p.make()
+                    ref.body.h.value = self.dt   # (the step h set before the build)
                 except Exception as err:   # (the other ranks would wait for this one: raise it everywhere)
                     error = err
         if spread:
@@ -448,7 +449,7 @@ class System:
             return
         for r in self._local_refs():
             r.body.h.value = h
-        self._h_set = self.dt
+        self._h_set = self.dt if self._ready or not self.distribute else None   # (placed bodies: built later)
 
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""
