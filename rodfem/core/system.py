@@ -29,6 +29,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from rodfem.common.limits import check_elements
 from rodfem.core.body import Body
 from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
@@ -37,7 +38,6 @@ from rodfem.core.joints import Frame, Joint, Point
 from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.core.spaces import dofs_per_element
-from rodfem.common.limits import check_elements
 from rodfem.errors import ConstraintError
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max
 from rodfem.fem.batch import Functionals, Segments

@@ -9,7 +9,6 @@ multipliers, the constraint residual, the balance) and the final state's norm eq
 ranks), on rigid boxes with springs and dashpots (components between ranks) and on two free 3D rods
 (fewer bodies than ranks: each over all ranks); an error met on one rank only stops every rank (no rank left waiting)."""
 import pytest
-
 from processes import assert_same_rows, script_on_ranks
 
 COMMON = """
