@@ -827,7 +827,8 @@ class JointRows:
         self.batch = points.batch if type(self).update is JointRows.update else None
         self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
-        self.work = self.dissipated = self._batch_work = 0.0
+        self._batch_work = 0.0
+        self._sums = (0.0, 0.0)   # (work, dissipated) of the last residual, on rank 0: `work`, `dissipated`
         self._terms = []
 
     def entries(self):
@@ -881,7 +882,22 @@ class JointRows:
                 b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
             work += w
             lost += d
-        self.work, self.dissipated = self.comm.bcast((work, lost), root=0)
+        self._sums = (work, lost)
+
+    def _shared_sums(self):
+        """(work, dissipated) of the last residual, the same on every rank (collective: read by the time
+        loop once a step, not at every residual)."""
+        return self._sums if self.comm.size == 1 else self.comm.bcast(self._sums, root=0)
+
+    @property
+    def work(self):
+        """The driven joints' and the servos' supplied work of the last step (collective)."""
+        return self._shared_sums()[0]
+
+    @property
+    def dissipated(self):
+        """The dampers' dissipated energy of the last step (collective)."""
+        return self._shared_sums()[1]
 
     def jacobian(self, X, A):
         if self.batch is not None and self.comm.rank == 0:
