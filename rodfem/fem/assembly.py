@@ -71,16 +71,26 @@ class BlockLayout:
     def create_matrix(self, entries):
         """An AIJ matrix with the (rows, cols) pairs of `entries` (global; a rank may list rows of
         another) and the whole diagonal; new entries may still be inserted later."""
-        N = self.size_global
-        keys = [np.asarray(r, np.int64) * N + np.asarray(c, np.int64) for r, c in entries]
-        key = np.concatenate(keys) if keys else np.zeros(0, np.int64)
+        import scipy.sparse as sp
+        N, lo, hi = self.size_global, self.start, self.start + self.size_local
+        rows = np.concatenate([np.asarray(r, np.int64).ravel() for r, _ in entries] + [np.zeros(0, np.int64)])
+        cols = np.concatenate([np.asarray(c, np.int64).ravel() for _, c in entries] + [np.zeros(0, np.int64)])
         if self.comm.size > 1:   # the entries of other ranks' rows go to their owners
-            owner = self.owner(key // N)
-            key = np.concatenate(self.comm.alltoall([key[owner == p] for p in range(self.comm.size)]))
-        diagonal = self.start + np.arange(self.size_local, dtype=np.int64)
-        key = np.unique(np.concatenate([key, diagonal * N + diagonal]))
-        rows, cols = np.divmod(key, N)
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(rows - self.start, minlength=self.size_local))])
+            away = (rows < lo) | (rows >= hi)
+            owner = self.owner(rows[away])
+            got = self.comm.alltoall([np.stack([rows[away][owner == p], cols[away][owner == p]])
+                                      for p in range(self.comm.size)])
+            rows = np.concatenate([rows[~away]] + [g[0] for g in got])
+            cols = np.concatenate([cols[~away]] + [g[1] for g in got])
+        diagonal = np.arange(lo, hi, dtype=np.int64)
+        # the pattern: duplicates merged row by row (a linear pass and a sort within each row, not a sort
+        # of all the entries: the same pattern, at 2e4 planar elements 0.54 instead of 0.93 s)
+        pattern = sp.coo_matrix((np.ones(len(rows) + len(diagonal), np.int8),
+                                 (np.concatenate([rows, diagonal]) - lo, np.concatenate([cols, diagonal]))),
+                                shape=(self.size_local, N)).tocsr()
+        pattern.sum_duplicates()
+        pattern.sort_indices()
+        indptr, cols = pattern.indptr, pattern.indices
         A = PETSc.Mat().createAIJ(((self.size_local, N), (self.size_local, N)),
                                   csr=(indptr.astype(PETSc.IntType), cols.astype(PETSc.IntType)), comm=self.comm)
         A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)   # the pattern may grow
