@@ -55,6 +55,7 @@ CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
+PLACED = "tests/core/test_distributed_bodies.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -953,6 +954,27 @@ MUTATIONS = [
       [("            if ng >= 0 and len(self.bc_diag):", "            if False:")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
+    # -- bodies placed whole on ranks (rodfem/core/placement.py) ------------------------------------
+    M("placed-multipliers-overlap", "rodfem/fem/assembly.py",
+      [("            lo = bodies_end[r] + used.get(r, 0)", "            lo = bodies_end[r]")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "the joints of one rank share their multipliers' rows (each joint's multipliers not after the last one's)"),
+    M("placed-step-not-set", "rodfem/core/system.py",
+      [("                    ref.body.h.value = self.dt   # (the step h set before the build)\n", "")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "a body built on its rank keeps h = 1 when the run set the step before the build"),
+    M("placed-point-on-rank-start", "rodfem/core/system.py",
+      [("                return np.array([layout.body_start[i] + np.asarray(d, np.int64) for d in (pc.q_dofs, pc.v_dofs)])",
+        "                return np.array([layout.start + np.asarray(d, np.int64) for d in (pc.q_dofs, pc.v_dofs)])")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "a joint's point on another rank's body read at this rank's dofs"),
+    M("placed-error-kept-local", "rodfem/core/system.py",
+      [("        found = self.comm.allgather(None if error is None else (type(error), str(error)))\n"
+        "        if error is not None:\n            raise error\n",
+        "        if error is not None:\n            raise error\n"
+        "        found = self.comm.allgather(None)\n")],
+      [PLACED + "::test_error_on_one_rank_stops_every_rank"],
+      "a body that fails on its rank raises there only (the other ranks wait for it)"),
 ]
 
 

@@ -107,9 +107,9 @@ for k in range(4):
     prev = b
 s.build()
 """
-    cmd = ["timeout", "120", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", "2",
+    cmd = ["timeout", "60", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", "2",
            sys.executable, "-c", script]
     env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=180)
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=120)
     assert p.returncode not in (0, 124), p.stderr[-2000:]   # (124: timeout, a rank left waiting)
     assert p.stderr.count("broken on purpose") >= 2, p.stderr[-2000:]   # raised on both ranks
