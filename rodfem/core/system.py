@@ -323,7 +323,6 @@ class System:
             if p.owner == self.comm.rank and error is None:
                 try:
                     ref.body = p.make()
-                    ref.body.h.value = self.dt   # (the step h set before the build)
                 except Exception as err:   # (the other ranks would wait for this one: raise it everywhere)
                     error = err
         if spread:
