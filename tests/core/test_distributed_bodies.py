@@ -19,8 +19,8 @@ from rodfem import run
 from rodfem.core.system import System
 System.distribute = True
 
-def row(res, s):
-    out = {}
+def row(res, s, **extra):
+    out = dict(extra)
     for c in res.rows[0]:
         if c in ("wall_time", "newton_its") or not isinstance(res.rows[0][c], float):
             continue
@@ -113,3 +113,22 @@ s.build()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=120)
     assert p.returncode not in (0, 124), p.stderr[-2000:]   # (124: timeout, a rank left waiting)
     assert p.stderr.count("broken on purpose") >= 2, p.stderr[-2000:]   # raised on both ranks
+
+
+@pytest.mark.mpi
+def test_adaptive_steps_on_ranks_equal_serial():
+    """Adaptive steps (rodfem/analysis/stepping.py measures the error field by field, body by body: the
+    groups of the other ranks' bodies are empty on a rank): the same steps, rejections and history on 2
+    ranks as serially."""
+    script = COMMON + """
+sys.path.insert(0, "tests/core")
+from rodfem.analysis.stepping import StepControl
+from test_batch import chain
+s = chain(4, sizes=[2, 3, 2, 3])
+res = run(s, 1e-3, 6e-3, control=StepControl(adaptive=True, rtol=1e-4))
+row(res, s, steps=float(len(res.rows)), rejected=float(res.stepping["rejected"]))
+"""
+    serial, parallel = script_on_ranks(script, ranks=(1, 2), timeout=300)
+    assert parallel.pop("placed") and serial.pop("placed")
+    assert serial["steps"] > 7 and serial["rejected"] >= 1   # (adapted: more steps than 6, some rejected)
+    assert_same_rows(serial, parallel)
