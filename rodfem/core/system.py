@@ -80,8 +80,8 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
-    batch = True        # the default: bodies of the same compiled forms assembled together
     distribute = False  # the default under mpirun: every body's mesh over all ranks (rodfem/core/placement.py)
+    batch = True   # the default: bodies of the same compiled forms assembled together (serial)
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
                  momentum: Optional[bool] = None, batch: Optional[bool] = None, distribute: Optional[bool] = None):
@@ -120,15 +120,24 @@ class System:
         return self._place(name, model, length, n_elements, loads, supports, initial, contacts)
 
     def _place(self, name, model, length, n_elements, loads, supports, initial, contacts=()):
+        if self.distribute:   # (built on its rank when the system is built: rodfem/core/placement.py)
+            return self._place_later(name, model, length, n_elements, loads, supports, initial, contacts)
         if self._ready:
             raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
                                   "add every body before the first run")
-        if self.distribute:   # (built on its rank when the system is built: rodfem/core/placement.py)
-            check_elements(n_elements, dofs_per_element(model.fields), MPI.COMM_SELF)
-            body = Placement(model, length, n_elements, loads, supports, initial, self.integrator, name, contacts)
-        else:
-            body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts)
+        body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts)
         ref = BodyRef(name, body)
+        self.bodies[name] = ref
+        return ref
+
+    def _place_later(self, name, model, length, n_elements, loads, supports, initial, contacts=()):
+        """A body to be built on its rank by `build` (a Placement until then; rodfem/core/placement.py)."""
+        if self._ready:
+            raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
+                                  "add every body before the first run")
+        check_elements(n_elements, dofs_per_element(model.fields), MPI.COMM_SELF)
+        ref = BodyRef(name, Placement(model, length, n_elements, loads, supports, initial, self.integrator, name,
+                                      contacts))
         self.bodies[name] = ref
         return ref
 
