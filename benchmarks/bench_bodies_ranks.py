@@ -11,7 +11,8 @@ batched, the joints between ranks coupling them).  Whole process: the wall time 
 the command to its end (mpirun, imports, the build, the run), the median of `runs` runs, serial and
 two ranks in turn (A B A B ...: a shared machine's load drifts); per step: the wall time of the steps
 after the first (the first sets up the solver), measured in the process; the last column, the largest
-difference of the two runs' histories (every column, relative to its largest value).
+difference of the two runs' histories (every column, relative to the largest value of its kind: the
+multipliers to the largest multiplier).
 """
 import argparse
 import json
@@ -65,13 +66,16 @@ def once(N, steps, ranks):
 
 
 def difference(a, b):
-    """The largest difference of two histories, each column relative to its largest value (the balance
-    error, round-off: relative to the largest H)."""
-    worst, H = 0.0, max(abs(v) for v in a["H"])
+    """The largest difference of two histories, each column relative to the largest value of its kind
+    (every joint's multipliers: the largest multiplier; the balance error: the largest H)."""
+    import re
+
+    def kind(k):
+        return "H" if k == "balance_error" else re.sub(r"\d+", "", k.split(".")[-1])
+    scale = {}
     for k, x in a.items():
-        scale = max(max(abs(v) for v in x), 1e-9 * H)
-        worst = max(worst, max(abs(u - v) for u, v in zip(x, b[k])) / scale)
-    return worst
+        scale[kind(k)] = max(scale.get(kind(k), 0.0), max(abs(v) for v in x))
+    return max(max(abs(u - v) for u, v in zip(x, b[k])) / max(scale[kind(k)], 1e-300) for k, x in a.items())
 
 
 def section(rows, runs, steps):
