@@ -53,6 +53,7 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
+ROD_FRICTION = "tests/models/test_rod_friction.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
 PLACED = "tests/core/test_distributed_bodies.py"
@@ -64,6 +65,9 @@ REDUCE = "tests/analysis/test_reduce.py"
 GALERKIN = "tests/analysis/test_galerkin.py"
 TENDON_DYN = "tests/models/test_tendon_arm_dynamic.py"
 DAMPING = "tests/models/test_damping.py"
+CAPSTAN = "tests/models/test_capstan.py"
+GRASP = "tests/models/test_soft_arm_grasp.py"
+STABILITY = "tests/analysis/test_stability.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -598,6 +602,72 @@ MUTATIONS = [
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
 
+    # -- friction between rods; the contact pattern grown at once (issue 24) ----------------------
+    M("rodfriction-one-sided", "rodfem/core/bodycontact.py",
+      [("        return share[:, :, None] * f[:, None, :], np.einsum(\"nj,nj->n\", f, vt)",
+        "        return np.abs(share)[:, :, None] * f[:, None, :], np.einsum(\"nj,nj->n\", f, vt)")],
+      [f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]"],
+      "the friction force on both rods in the same direction (no reaction): momentum not conserved"),
+    M("rodfriction-not-dissipated", "rodfem/core/bodycontact.py",
+      [("                lost -= self.h * float(np.sum(power))", "                lost -= 0.0")],
+      [f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]",
+       f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "the friction's work not booked in `dissipated`: the balance breaks"),
+    M("rodfriction-end-velocity", "rodfem/core/bodycontact.py",
+      [("        rel = np.einsum(\"nk,nkj->nj\", share, 0.5 * (V0 + V1))", "        rel = np.einsum(\"nk,nkj->nj\", share, V1)")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block",
+       f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]"],
+      "the slip of the end-of-step velocities instead of the midpoint's: the friction's work is not h f . v_t,m"),
+    M("rodfriction-normal-slip", "rodfem/core/bodycontact.py",
+      [("        vt = rel - np.einsum(\"nj,nj->n\", rel, n)[:, None] * n", "        vt = rel")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "the normal part of the relative velocity left in the slip: the approach is resisted too"),
+    M("rodfriction-static-coefficient", "forms/contact.py",
+      [("        mu = mu_k + (mu_s - mu_k) * exp(-s2 / v_s ** 2)", "        mu = mu_s + 0.0 * mu_k * exp(-s2 / v_s ** 2)")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block",
+       f"{ROD_FRICTION}::test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above[above-threshold]"],
+      "the static coefficient while sliding (no Stribeck blend to mu_k)"),
+    M("rodfriction-no-velocity-jacobian", "rodfem/core/bodycontact.py",
+      [("                parts.append((self._free(p.indices(pairs, \"v\").reshape(-1, 12)), -dv))", "                pass")],
+      [f"{ROD_FRICTION}::test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block"],
+      "Newton's matrix without the friction's derivative in v_{n+1}: Newton stalls on the stiff damper"),
+    M("rodcontact-pattern-misses-friction", "rodfem/core/bodycontact.py",
+      [("                for kind in (\"q\", \"v\") if getattr(p.law, \"friction\", None) is not None and self.rubs else (\"q\",):",
+        "                for kind in (\"q\",):")],
+      [f"{ROD_FRICTION}::test_the_pattern_grown_at_once_gives_the_same_history"],
+      "the grown pattern without the friction's (v, v) entries (caught by the count of mallocs)"),
+    M("rodcontact-two-tree-reach", "rodfem/core/bodycontact.py",
+      [("        reach = float(np.max(radii)) + float(np.max(other_radii))", "        reach = float(np.max(radii))")],
+      [f"{ROD_FRICTION}::test_broad_phase_between_two_bodies_finds_every_overlap"],
+      "the two bodies' k-d trees searched within max r_a instead of max r_a + max r_b: overlaps missed"),
+
+    # -- the capstan and the grasp (issue 24) --------------------------------------------------------
+    M("capstan-friction-normal-unscaled", "forms/contact.py",
+      [("        N = -z * norm\n", "        N = -z\n")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the friction's normal force -psi'(xi) without |grad xi| (right on a plane, |grad xi| = 1; wrong on a drum)"),
+    M("capstan-arc-spacing", "demos/capstan.py",
+      [('    h = 2 * Rc * np.sin(theta / (2 * n_a)) / stretch(p, p["T1"])', '    h = Rc * theta / n_a / stretch(p, p["T1"])')],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the string's nodes on the drum at arc-length spacing: its chords start compressed, not at T1"),
+    M("capstan-oracle-sign", "demos/capstan.py",
+      [("        ratio *= (e_in @ t + mu * (e_in @ n)) / (e_out @ t + mu * (e_out @ n))",
+        "        ratio *= (e_in @ t - mu * (e_in @ n)) / (e_out @ t - mu * (e_out @ n))")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the discrete polygon's node balance with the friction turned round"),
+    M("capstan-regularization-ignored", "demos/capstan.py",
+      [('    mu = p["mu"] * p["V"] / np.hypot(p["V"], p["eps"])\n    return', '    mu = p["mu"]\n    return')],
+      [f"{CAPSTAN}::test_regularized_friction_gives_the_regularized_ratio"],
+      "the regularized ratio with the Coulomb coefficient (the viscous part below eps ignored)"),
+    M("capstan-push", "demos/capstan.py",
+      [("        return -u * direction", "        return u * direction")],
+      [f"{CAPSTAN}::test_sliding_string_has_the_capstan_ratio[pi-0.3]"],
+      "the right end pushed instead of pulled"),
+    M("grasp-soft-penalty", "demos/soft_arm_grasp.py",
+      [('stiffness_for(tau / Rw, p["penetration"])', 'stiffness_for(tau / Rw, 4 * p["penetration"])')],
+      [f"{GRASP}::test_grasp_keeps_the_balance_and_the_penetration"],
+      "the pole's penalty made for four times the stated penetration"),
+
     # -- 3D rod materials (issue 31) --
     M("rod-material-dg-dropped", "forms/cosserat_rod.py",
       [('weights=[c[f"w{i}"] for i in range(6)])', 'weights=[0.0 * c[f"w{i}"] for i in range(6)])')],
@@ -976,6 +1046,12 @@ MUTATIONS = [
         "        found = self.comm.allgather(None)\n")],
       [PLACED + "::test_error_on_one_rank_stops_every_rank"],
       "a body that fails on its rank raises there only (the other ranks wait for it)"),
+    # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
+    M("stability-sign", "rodfem/la/pencil.py",
+      [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",
+        "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
+      [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
+      "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
 ]
 
 

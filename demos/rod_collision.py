@@ -25,6 +25,16 @@
 # sqrt(2 R d) = sqrt(4 r d)) the segment pairs in the zone share the contact (`zone`): the
 # stiffness does not grow with the number of elements.
 #
+# ## Friction (`mu` > 0, forms/rod_contact.py)
+#
+# With `mu` the rods rub: regularized Coulomb friction (forms/contact.py's `Coulomb`, mu_s = mu_k = mu)
+# between the closest points, against their relative slip; `slide` gives them a relative velocity along
+# x (along rod a, across rod b).  The friction forces are equal and opposite: the total linear momentum
+# stays constant to round-off; the friction's work is the column `dissipated` (H - supplied +
+# dissipated constant to round-off); the total angular momentum changes by the moment of the
+# force couples, h touch.Mf per step (the friction acts at the tubes' surfaces, the centrelines carry
+# it a distance R apart).  The *_rigid columns stay the frictionless answer.
+#
 # ## The rigid-body answer (frictionless, elastic)
 #
 # Rod b crosses rod a at the distance `offset_a` from a's centre (along a), rod a crosses b at
@@ -41,6 +51,7 @@
 #
 # Run it:  rodfem run rod-collision --out results/rod-collision
 #          rodfem run rod-collision --set E=1e10 --set offset_a=0.1 --out results/rod-collision-stiff
+#          rodfem run rod-collision --set mu=0.3 --set slide=0.1 --out results/rod-collision-friction
 
 import sys
 
@@ -51,6 +62,7 @@ from rodfem.app.cli import main
 from rodfem.app.scene import Parameter, Scene, common, stiffness
 from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
+from rodfem.forms.contact import Coulomb
 from rodfem.forms.rod_contact import RodContact
 
 parameters = common(n_elements=8, dt=5e-4, t_end=0.06, integrator="discrete-gradient") + [
@@ -66,6 +78,8 @@ parameters = common(n_elements=8, dt=5e-4, t_end=0.06, integrator="discrete-grad
     stiffness("penetration", 1e-3, "m", "penetration of a rigid-body impact (sets the penalty k)"),
     Parameter("contact", "on", "", "off: no contact (the rods pass through each other; for comparison)",
               choices=("on", "off")),
+    Parameter("mu", 0.0, "", "Coulomb friction coefficient between the rods (0: frictionless)", low=0),
+    Parameter("slide", 0.0, "m/s", "relative sliding speed along x (rod a at +slide/2, rod b at -slide/2)"),
 ]
 
 
@@ -121,12 +135,14 @@ def build(p, comm):
     z = r + 0.5 * p["gap"]
     system = System(integrator=p["integrator"], comm=comm, newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
     a = system.add("a", rod, L, p["n_elements"],
-                   initial=straight((0.0, p["offset_b"], z), (1, 0, 0), (0, 1, 0), (0.0, 0.0, -0.5 * V), L))
+                   initial=straight((0.0, p["offset_b"], z), (1, 0, 0), (0, 1, 0), (0.5 * p["slide"], 0.0, -0.5 * V), L))
     b = system.add("b", rod, L, p["n_elements"],
-                   initial=straight((p["offset_a"], 0.0, -z), (0, 1, 0), (0, 0, 1), (0.0, 0.0, 0.5 * V), L))
+                   initial=straight((p["offset_a"], 0.0, -z), (0, 1, 0), (0, 0, 1), (-0.5 * p["slide"], 0.0, 0.5 * V), L))
     # ## The contact: columns touch.N (normal force), touch.Fn_x, _y, _z (on rod a), touch.penetration
     if p["contact"] == "on":
-        system.contact(RodContact(contact_stiffness(p), r, zone=np.sqrt(4 * r * p["penetration"])), a, b, name="touch")
+        friction = Coulomb(p["mu"]) if p["mu"] > 0 else None
+        system.contact(RodContact(contact_stiffness(p), r, zone=np.sqrt(4 * r * p["penetration"]), friction=friction),
+                       a, b, name="touch")
     system.record(momenta(p))
     return system
 
@@ -158,7 +174,8 @@ scene = Scene("rod-collision", "two elastic rods crossing at right angles collid
               "contact): momentum and energy exact, stiff rods against the rigid-body impulse law",
               parameters, build,
               notes="Total p, L constant to round-off; discrete gradient: H constant to round-off; pz_a, pz_b, "
-                    "Ly_a, Lx_b approach their *_rigid columns as E grows.")
+                    "Ly_a, Lx_b approach their *_rigid columns as E grows.  With mu > 0: p constant, L changes "
+                    "by h touch.Mf per step, H - supplied + dissipated constant to round-off.")
 
 if __name__ == "__main__":
     sys.exit(main(["run", scene.name, *sys.argv[1:]]))

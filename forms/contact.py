@@ -81,7 +81,8 @@ of a body with a cross-section is the surface point x - r n: its velocity is v -
 d2, d3 facing the obstacle), v - r omega (-n_y, n_x) for a planar beam, v for a string or a point.
 The friction of a rolling rod thus acts on its spin as well.
 
-Not here: rod-rod and self-contact (only a body against a fixed analytic obstacle), moving
+Rod-rod and self-contact (forms/rod_contact.py) take the same law between the closest points of two
+segments.  Not here: moving
 obstacles, the exact (non-regularized) Coulomb law, rolling resistance, contact in statics.
 """
 from dataclasses import dataclass
@@ -268,12 +269,16 @@ class Coulomb:
 
     def force(self, N, vt, c=None):
         """f_t = -mu(|v_t|) N v_t / sqrt(|v_t|^2 + eps^2) (UFL with the constants c, or numbers)."""
+        return self.factor(N, _dot(vt, vt), c) * vt
+
+    def factor(self, N, s2, c=None):
+        """-mu(s) N / sqrt(s^2 + eps^2) of the slip's square s2 = |v_t|^2 (f_t is it times v_t; numpy arrays
+        elementwise: many contact points at once, e.g. forms/rod_contact.py's segment pairs)."""
         mu_s, mu_k, eps, v_s = ((c["mu_s"], c["mu_k"], c["eps"], c["v_s"]) if c is not None
                                 else (self.mu_s, self.mu_k, self.eps, self.v_s))
-        s2 = _dot(vt, vt)
         exp = ufl.exp if isinstance(s2, ufl.core.expr.Expr) else np.exp
         mu = mu_k + (mu_s - mu_k) * exp(-s2 / v_s ** 2)
-        return -mu * N / _sqrt(s2 + eps ** 2) * vt
+        return -mu * N / _sqrt(s2 + eps ** 2)
 
     def constants(self, mesh):
         return {k: fem.Constant(mesh, float(getattr(self, k))) for k in ("mu_s", "mu_k", "eps", "v_s")}

@@ -49,6 +49,29 @@ What the discretization is and is not:
   (by default pi r: a rod bent back on itself with the tightest radius its section allows, r,
   touches itself at arc distance pi r) are left out, the neighbours always.
 
+Friction (`friction=Coulomb(mu_s, mu_k, eps, v_s)`, forms/contact.py's regularized Coulomb law, the same
+object as an obstacle's): at each segment pair in contact, with the closest points' parameters a, b and
+the normal n of the midpoint state X_m, the slip is the tangential part of the closest points' relative
+velocity at the step's midpoint
+
+    v_t = (I - n n^T) [(1 - a) v_i + a v_{i+1} - (1 - b) v_j - b v_{j+1}]_m,
+
+and the friction force on body a's closest point is f = -mu(|v_t|) N v_t / sqrt(|v_t|^2 + eps^2), with
+the pair's normal force of the step N = -w z >= 0 (z the penalty's difference quotient, w the pair's
+weight); -f acts on body b's.  The forces go to the segments' nodes as (1 - a, a) f and -(1 - b, b) f:
+they sum to zero (linear momentum exact), and their work in the step is
+
+    h f . v_t <= 0,
+
+booked in `dissipated` (the balance H_{n+1} - H_n + dissipated = supplied stays exact).  The two
+closest points are d = |x_c - y_c| apart along n while f is tangential: the pair of forces has the
+moment (x_c - y_c) x f = d n x f (|.| <= R mu_s N), the moment about the centrelines of the friction
+acting at the tubes' surfaces, which a rod with rotating sections would take as spin.  The centreline
+contact does not apply it to the sections, so the total angular momentum changes by exactly
+h sum (x_c - y_c)_m x f per step (name.Mf_x, _y, _z: that moment), a bound of R mu_s N per unit time.
+It is not a regularization of the set-valued law that sticks exactly: see forms/contact.py for the
+creep at eps and the time step the stiff damper wants.
+
 Energy consistency: the integrator (rodfem/core/bodycontact.py) takes the penalty's difference
 quotient in the distance, z = [psi(g_{n+1}) - psi(g_n)] / (d_{n+1} - d_n) (`quotient`, exact in
 closed form for the cubic), times a discrete gradient of the distance that keeps the momenta; see
@@ -57,6 +80,7 @@ there.  Strings use the same code (their radius: the tube about the centreline).
 import numpy as np
 
 from rodfem.errors import InputError
+from rodfem.forms.contact import Coulomb
 
 
 def closest_points(p0, p1, q0, q1):
@@ -91,10 +115,12 @@ class RodContact:
     (default pi r_A; >= 0);
     zone: the contact zone's size sqrt(2 R d) at the design penetration d (>= 0; 0: every segment pair
     weighs 1, see the module docstring);
+    friction: None (frictionless) or a Coulomb of forms/contact.py (regularized Coulomb friction between the
+    closest points, see the module docstring);
     name: the history columns' prefix.
     """
 
-    def __init__(self, stiffness, radius, radius_b=None, exclude=None, zone=0.0, name="rod_contact"):
+    def __init__(self, stiffness, radius, radius_b=None, exclude=None, zone=0.0, friction=None, name="rod_contact"):
         if not (np.isfinite(stiffness) and stiffness > 0):
             raise InputError(f"rod contact {name}: stiffness must be a positive number (got {stiffness!r})")
         radius_b = radius if radius_b is None else radius_b
@@ -108,6 +134,9 @@ class RodContact:
             raise InputError(f"rod contact {name}: zone must be a length >= 0 (got {zone!r})")
         self.k, self.radii, self.exclude, self.name = float(stiffness), (float(radius), float(radius_b)), float(exclude), name
         self.zone = float(zone)
+        if friction is not None and not isinstance(friction, Coulomb):
+            raise InputError(f"rod contact {name}: friction must be a Coulomb (forms/contact.py) or None (got {friction!r})")
+        self.friction = friction
 
     closest_points = staticmethod(closest_points)
 

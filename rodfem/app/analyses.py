@@ -14,6 +14,7 @@ import numpy as np
 from mpi4py import MPI
 
 from rodfem.analysis.linearize import Linearization, mode_shapes, natural_modes, plot_modes
+from rodfem.analysis.stability import check_mode, stability_of
 from rodfem.analysis.statics import StaticFailure, Statics
 from rodfem.app.driver import build, record, stop_of, stopped
 from rodfem.common import interrupts
@@ -76,7 +77,7 @@ def finite_time(t):
     return t
 
 
-def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, comm=None):
+def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, comm=None, stability="auto"):
     """The static equilibrium of `scene` under its inputs at time t (default: t_end, the full load).
 
     Writes into `out` (if given): summary.json (load steps, Newton iterations, the observables
@@ -85,6 +86,8 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     (the initial and the equilibrium shape), shapes.png, and checkpoint.npz: the equilibrium as
     the state at step 0, from which ``rodfem run --resume out`` starts a dynamic run (at rest,
     pre-stressed).  A signal stops it between two load steps (summary.json: "interrupted").
+    summary["stability"]: whether the equilibrium is stable, from the eigenvalues of the linearized
+    model (rodfem/analysis/stability.py; `stability` auto, on or off).
     Returns (problem, StaticResult, summary)."""
     from rodfem._version import __version__
     from rodfem.io import checkpoint
@@ -96,6 +99,7 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
     if steps < 1:
         raise ParameterError(f"--load-steps must be an integer >= 1 (got {steps})")
     check_load_steps(steps)
+    check_mode(stability)
     started = heading(scene, p, "static", comm, t=t)
     with owned(out, started, comm, subdir="centreline") as outdir:
         problem = build(scene, p, comm)
@@ -129,6 +133,9 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
                             {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
             writer.frame(1.0)
             rows.close()
+        t1 = time.perf_counter()
+        summary["stability"] = dict(stability_of(problem, statics, t, stability), wall_time_s=time.perf_counter() - t1)
+        if outdir:
             outdir.do("write summary.json", write_json, outdir.file("summary.json"), summary)
             outdir.do("write shapes.png", plot_shapes, outdir.file("shapes.png"), writer.snapshots,
                       writer.dim, writer.width, 16, "load factor (0: initial, 1: equilibrium)")

@@ -44,11 +44,11 @@ def silence(stream):
     os.close(null)
 
 
-def parse_sets(pairs):
+def parse_sets(pairs, option="--set"):
     overrides = {}
     for pair in pairs or []:
         if "=" not in pair:
-            raise ParameterError(f"--set expects NAME=VALUE (got {pair!r})")
+            raise ParameterError(f"{option} expects NAME=VALUE (got {pair!r})")
         name, value = pair.split("=", 1)
         overrides[name.strip()] = value.strip()
     return overrides
@@ -121,8 +121,9 @@ def cmd_static(args):
     """rodfem static SCENE: the equilibrium of the discrete model under the loads at t (default t_end)."""
     from rodfem.app.analyses import run_static
     out = args.out or os.path.join("results", args.scene + "-static")
+    from rodfem.analysis.stability import verdict
     _, result, summary = run_static(args.scene, parse_sets(args.set), out=out, t=args.time,
-                                    steps=args.load_steps, adaptive=not args.fixed_steps)
+                                    steps=args.load_steps, adaptive=not args.fixed_steps, stability=args.stability)
     err = (f", error {summary['error_relative']:.3e} of the scale against the exact solution"
            if summary.get("error_relative") is not None else "")
     say(f"{summary['scene']}: static equilibrium at t = {summary['t']:g} in {summary['load_steps']} load steps "
@@ -130,6 +131,7 @@ def cmd_static(args):
         f"{summary['wall_time_s']:.2f} s{err}")
     if summary.get("warning"):
         say(f"warning: {summary['warning']}")
+    say(verdict(summary["stability"]))
     say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png, checkpoint.npz "
         f"(a dynamic run from this equilibrium: rodfem run --resume {out} --out NEWDIR)")
 
@@ -194,7 +196,8 @@ def cmd_reduce(args):
 def cmd_reduce_nonlinear(args, out):
     """rodfem reduce SCENE --nonlinear: the POD-Galerkin reduced model of the nonlinear scene (issue 29)."""
     from rodfem.app.nonlinear_reduction import run_nonlinear_reduce
-    info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test), orders=args.order, out=out)
+    info = run_nonlinear_reduce(args.scene, parse_sets(args.set), test=parse_sets(args.test, "--test"), orders=args.order,
+                                out=out)
     runs = info["runs"]
     say(f"{info['scene']}: nonlinear reduced models ({runs['train']['dofs']} dofs; full model "
         + ", ".join(f"{k} {v['full_ms_per_step']:.3g} ms/step" for k, v in runs.items()) + ")")
@@ -242,6 +245,9 @@ def add_static_parsers(sub):
     sp.add_argument("--time", type=float, metavar="T", help="the loads at time T (default t_end: the full load)")
     sp.add_argument("--load-steps", type=whole, default=1, metavar="N", help="first load step 1/N (default 1)")
     sp.add_argument("--fixed-steps", action="store_true", help="no growing of the load step (halving on failure stays)")
+    sp.add_argument("--stability", default="auto", choices=("auto", "on", "off"),
+                    help="whether the equilibrium is stable, from the eigenvalues of the linearized model "
+                         "(auto: up to 600 dofs, about 1 s; on: up to 2000; default auto)")
     sp.set_defaults(func=cmd_static)
     for name, func, what in (("linearize", cmd_linearize, "linear PH model E, J, R, Q, B, C of a scene (.npz, .mat)"),
                              ("modes", cmd_modes, "natural frequencies and mode shapes of a scene")):
@@ -287,8 +293,6 @@ def main(argv=None):
     import signal
     signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `rodfem list | head`: end quietly, not via PETSc's handler
     args = parser().parse_args(argv)
-    import logging
-    logging.disable(logging.INFO)  # the JIT compiler logs every C build step at INFO
     try:
         with interrupts.deferred():
             check_directories(args)

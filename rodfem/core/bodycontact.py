@@ -32,7 +32,21 @@ not O(n^2)), and every pair they contain that is in contact at x_n, x_m or x_{n+
 So the residual is one function of x_{n+1}: the sum over ALL segment pairs (the others contribute
 exactly zero, their spheres being apart), and a contact that starts or ends within a step is in the
 difference quotient.  Newton's matrix is dF/dx_{n+1} of each contributing pair by central
-differences (its entries join the matrix's pattern when a new pair appears).
+differences.
+
+Friction (a law with a `friction`, forms/rod_contact.py): the friction force f of each pair in contact
+(the law's Coulomb `factor` times the slip v_t of the closest points at the midpoint) acts as f on body
+a's closest point and -f on body b's, shared by the nodes as the normal force is; its work
+h f . v_t <= 0 is the step's `dissipated`.  It needs the nodes' velocities (gathered with the
+positions) and h (`step(X0, h)`); Newton's matrix gets its derivatives in x_{n+1} and v_{n+1} (central
+differences).  Not in statics (at rest nothing slips).
+
+Newton's matrix pattern: the entries of the CANDIDATE pairs (the broad phase's, a superset of the
+pairs in contact) are added to the matrix's pattern in one re-preallocation when pairs appear that it
+does not hold yet (`grow`, called by the assembler before it zeroes the matrix), instead of PETSc
+reallocating the whole matrix for every new nonzero; the pattern is kept (and reused) afterwards.  The
+pairs' 12 x 12 blocks are added one call each, the supported rows and columns as PETSc's ignored
+index -1.
 
 Under MPI the nodes of the bodies in contact are gathered on rank 0 (one scatter of the position
 dofs; rods are long and thin, so this is n_nodes x 3 numbers), which computes the pairs and adds
@@ -52,11 +66,21 @@ FD_STEP = 1e-7      # Newton's matrix: central differences with steps FD_STEP R
 RIGID_BELOW = 1e-6  # |P dX| <= RIGID_BELOW R: no correction (see the module docstring)
 
 
-def close_pairs(centres, radii):
+def close_pairs(centres, radii, others=None, other_radii=None):
     """All pairs (i, j), i < j, of spheres (centres (n, 3), radii (n,)) that overlap: |c_i - c_j| <= r_i + r_j
-    (cKDTree.query_pairs within 2 max r, then the exact test).  Returns an array (m, 2)."""
+    (cKDTree.query_pairs within 2 max r, then the exact test); with `others` (and their radii), the
+    pairs (i of centres, j of others) that overlap (two trees: no pair within one set is visited).
+    Returns an array (m, 2)."""
+    none = np.zeros((0, 2), dtype=np.int64)
+    if others is not None:
+        if not len(centres) or not len(others):
+            return none
+        reach = float(np.max(radii)) + float(np.max(other_radii))
+        pairs = cKDTree(centres).sparse_distance_matrix(cKDTree(others), reach, output_type="ndarray")
+        keep = pairs["v"] <= radii[pairs["i"]] + other_radii[pairs["j"]]
+        return np.column_stack([pairs["i"][keep], pairs["j"][keep]]).astype(np.int64)
     if len(centres) < 2:
-        return np.zeros((0, 2), dtype=np.int64)
+        return none
     tree = cKDTree(centres)
     pairs = tree.query_pairs(2.0 * float(np.max(radii)), output_type="ndarray")
     if len(pairs):
@@ -138,11 +162,8 @@ class Pairing:
             sep = s[pairs[:, 1]] - s[pairs[:, 0] + 1]   # arc length between the segments (i < j)
             return pairs[(sep >= self.law.exclude) & (pairs[:, 1] > pairs[:, 0] + 1)]
         cb, rad_b = segment_spheres(*[nodes_b[k] for k in configurations], grow=rb)
-        na = len(ca)
-        pairs = close_pairs(np.vstack([ca, cb]), np.concatenate([rad_a, rad_b]))
-        pairs = pairs[(pairs[:, 0] < na) & (pairs[:, 1] >= na)]
-        pairs[:, 1] -= na
-        return pairs
+        pairs = close_pairs(ca, rad_a, cb, rad_b)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
     def stack(self, nodes_a, nodes_b, pairs):
         """The pairs' node positions (m, 4, 3): x_i, x_{i+1}, y_j, y_{j+1}."""
@@ -200,6 +221,39 @@ class Pairing:
         z = self.law.quotient(d0, d1, self.R)
         return z[:, None, None] * D
 
+    def normal_effort(self, X0, X1, rule="discrete-gradient"):
+        """z of the step: the penalty's difference quotient in the distance (psi'(d(X_m)) with rule 'midpoint')."""
+        if rule == "midpoint":
+            return self.law.slope(self.distance(0.5 * (X0 + X1)), self.R)
+        return self.law.quotient(self.distance(X0), self.distance(X1), self.R)
+
+    def friction(self, X0, X1, V0, V1, w, rule="discrete-gradient"):
+        """(F, power): the friction forces on the pairs' nodes (m, 4, 3) and their power f . v_t <= 0 (m,) of the
+        step (forms/rod_contact.py): f = factor(N, |v_t|^2) v_t on body a's closest point, -f on body b's, with
+        the closest points' parameters and normal at X_m, the slip of the midpoint velocities and N = -w z."""
+        a, b, n = self.law_points(0.5 * (X0 + X1))[1:]
+        share = np.stack([1.0 - a, a, b - 1.0, -b], axis=1)                   # (m, 4): a's nodes +, b's -
+        rel = np.einsum("nk,nkj->nj", share, 0.5 * (V0 + V1))                  # v_a(a) - v_b(b) at the midpoint
+        vt = rel - np.einsum("nj,nj->n", rel, n)[:, None] * n
+        N = np.maximum(-w * self.normal_effort(X0, X1, rule), 0.0)
+        f = self.law.friction.factor(N, np.einsum("nj,nj->n", vt, vt))[:, None] * vt
+        return share[:, :, None] * f[:, None, :], np.einsum("nj,nj->n", f, vt)
+
+    def friction_jacobian(self, X0, X1, V0, V1, w, rule="discrete-gradient"):
+        """(dF/dX1, dF/dV1), each (m, 12, 12) [pair, row, column], of `friction` by central differences."""
+        m = len(X0)
+        out = []
+        for k, step in ((1, FD_STEP * max(self.R, 1e-12)), (3, FD_STEP * max(float(np.max(np.abs(V1), initial=0.0)), 1e-8))):
+            E = np.eye(12).reshape(12, 4, 3) * step
+            args = [np.repeat(A, 12, axis=0) for A in (X0, X1, V0, V1)]
+            plus, minus = list(args), list(args)
+            plus[k] = (args[k].reshape(m, 12, 4, 3) + E[None]).reshape(-1, 4, 3)
+            minus[k] = (args[k].reshape(m, 12, 4, 3) - E[None]).reshape(-1, 4, 3)
+            wr = np.repeat(w, 12)
+            diff = (self.friction(*plus, wr, rule)[0] - self.friction(*minus, wr, rule)[0]).reshape(m, 12, 12) / (2 * step)
+            out.append(np.transpose(diff, (0, 2, 1)))
+        return out
+
     def jacobian(self, X0, X1, rest=False, rule="discrete-gradient"):
         """d(z D)/dX1 (m, 12, 12) by central differences (`rest`: X0 = X1 moves too, the Hessian of V)."""
         m = len(X0)
@@ -232,80 +286,153 @@ class BodyContacts:
         self.lines = list(lines.values())
         self.pairings = [Pairing(law, lines[id(a)], None if b is None else lines[id(b)], name)
                          for law, a, b, name in items]
-        wanted = np.concatenate([ln.q.ravel() for ln in self.lines]).astype(PETSc.IntType)
+        self.rubs = not rest and any(getattr(p.law, "friction", None) is not None for p in self.pairings)
+        kinds = ("q", "v") if self.rubs else ("q",)
+        wanted = np.concatenate([getattr(ln, kind).ravel() for kind in kinds for ln in self.lines]).astype(PETSc.IntType)
         self.at, k = [], 0
         for ln in self.lines:
             self.at.append((k, len(ln.s)))
             k += 3 * len(ln.s)
+        self.v_at = k   # where the velocities start in the gathered vector
         root = self.comm.rank == 0
         self.gathered = PETSc.Vec().createSeq(len(wanted) if root else 0, comm=PETSc.COMM_SELF)
         is_from = PETSc.IS().createGeneral(wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(X, is_from, self.gathered, None)
-        self.x0 = None
+        self.x0 = self.v0 = None
+        self.h = 0.0
         self._terms = []
+        self._known = [set() for _ in self.pairings]   # the pairs (keys) whose entries the matrix's pattern holds
+        self._fresh = [np.zeros(0, np.int64) for _ in self.pairings]   # candidate pairs' keys of the last iterate
+        self.fixed_index = np.array(sorted(fixed), dtype=np.int64)
         self.work = self.dissipated = 0.0
         self.seconds = {"search": 0.0, "forces": 0.0, "matrix": 0.0}   # rank 0's CPU time in the contact (benchmarks)
 
-    def nodes(self, X):
-        """{id(line): node positions (n, 3)} of the state X (rank 0; None elsewhere)."""
+    def gather(self, X):
+        """({id(line): node positions (n, 3)}, {id(line): node velocities} (None without friction)) of the
+        state X (rank 0; None elsewhere)."""
         self.scatter.scatter(X, self.gathered, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         if self.comm.rank != 0:
-            return None
+            return None, None
         vals = self.gathered.getArray(readonly=True)
-        return {id(ln): vals[k:k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
+        x = {id(ln): vals[k:k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
+        v = ({id(ln): vals[self.v_at + k:self.v_at + k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
+             if self.rubs else None)
+        return x, v
 
-    def step(self, X0):
-        """The step from x_n = X0 (collective)."""
-        self.x0 = self.nodes(X0)
+    def nodes(self, X):
+        """{id(line): node positions (n, 3)} of the state X (rank 0; None elsewhere)."""
+        return self.gather(X)[0]
+
+    def step(self, X0, h=0.0):
+        """The step of size h from x_n = X0 (collective)."""
+        self.x0, self.v0 = self.gather(X0)
+        self.h = float(h)
 
     # -- the coupling's contract (rodfem/fem/assembly.py) -----------------------------------------
     def entries(self):
-        return []   # the pairs' entries join the pattern when they appear
+        return []   # the pairs' entries join the pattern when they appear (`grow`)
+
+    def grow(self):
+        """The (rows, cols) entries of the candidate pairs of the last iterate that the matrix's pattern does
+        not hold yet (rank 0; the others: []), or None if there are none on any rank (collective)."""
+        out = []
+        if self.comm.rank == 0:
+            for k, p in enumerate(self.pairings):
+                keys = self._fresh[k]
+                new = keys[[int(key) not in self._known[k] for key in keys]] if len(keys) else keys
+                if not len(new):
+                    continue
+                self._known[k].update(new.tolist())
+                nb = len((p.a if p.self_contact else p.b).s)
+                pairs = np.column_stack(np.divmod(new, nb))
+                rows = p.indices(pairs, "v").reshape(-1, 12)
+                for kind in ("q", "v") if getattr(p.law, "friction", None) is not None and self.rubs else ("q",):
+                    cols = p.indices(pairs, kind).reshape(-1, 12)
+                    out.append((np.repeat(rows, 12, axis=1).ravel(), np.tile(cols, (1, 12)).ravel()))
+        grown = self.comm.bcast(bool(out), root=0)
+        return out if grown else None
 
     def _active(self, p, x0, x1):
-        """The pairs of pairing p in contact at x_n, x_m or x_{n+1}: (pairs, X0, X1)."""
+        """The candidate pairs of pairing p (the broad phase's) and those in contact at x_n, x_m or x_{n+1}:
+        (candidates, pairs, X0, X1, weights)."""
         a, b = id(p.a), None if p.self_contact else id(p.b)
         nodes = [(x0[a], x1[a], 0.5 * (x0[a] + x1[a])), None if b is None else (x0[b], x1[b], 0.5 * (x0[b] + x1[b]))]
         pairs = p.candidates(nodes[0], nodes[1], (0, 1))
         X0 = p.stack(x0[a], None if b is None else x0[b], pairs)
         X1 = p.stack(x1[a], None if b is None else x1[b], pairs)
         near = np.minimum.reduce([p.distance(X) for X in (X0, X1, 0.5 * (X0 + X1))]) < p.R if len(pairs) else []
-        return pairs[near], X0[near], X1[near], p.weights(pairs[near])
+        return pairs, pairs[near], X0[near], X1[near], p.weights(pairs[near])
 
     def update(self, X):
         start = time.process_time()
-        x1 = self.nodes(X)
+        x1, v1 = self.gather(X)
         if self.rest:
             self.x0 = x1
         self._terms = []
         if self.comm.rank == 0:
-            for p in self.pairings:
-                pairs, X0, X1, w = self._active(p, self.x0, x1)
-                if len(pairs):
-                    self._terms.append((p, pairs, X0, X1, w))
+            for k, p in enumerate(self.pairings):
+                candidates, pairs, X0, X1, w = self._active(p, self.x0, x1)
+                self._fresh[k] = candidates[:, 0] * len((p.a if p.self_contact else p.b).s) + candidates[:, 1]
+                if not len(pairs):
+                    continue
+                rubs = self.rubs and getattr(p.law, "friction", None) is not None
+                V = (p.stack(self.v0[id(p.a)], None if p.self_contact else self.v0[id(p.b)], pairs),
+                     p.stack(v1[id(p.a)], None if p.self_contact else v1[id(p.b)], pairs)) if rubs else None
+                self._terms.append((p, pairs, X0, X1, w, V))
         self.seconds["search"] += time.process_time() - start
+
+    def _free(self, index):
+        """The global indices `index` with the supported ones replaced by -1 (PETSc ignores those)."""
+        index = np.asarray(index, dtype=np.int64)
+        if len(self.fixed_index):
+            index = np.where(np.isin(index, self.fixed_index), -1, index)
+        return index.astype(PETSc.IntType)
 
     def residual(self, X, b):
         start = time.process_time()
-        for p, pairs, X0, X1, w in self._terms:
-            rows = p.indices(pairs, "v").ravel()
-            vals = (w[:, None, None] * p.force(X0, X1, self.rule)).ravel()
-            keep = np.array([int(r) not in self.fixed for r in rows], dtype=bool)
-            b.setValues(rows[keep].astype(PETSc.IntType), np.ascontiguousarray(vals[keep]), addv=PETSc.InsertMode.ADD)
+        lost = 0.0
+        for p, pairs, X0, X1, w, V in self._terms:
+            vals = w[:, None, None] * p.force(X0, X1, self.rule)
+            if V is not None:   # friction: the force on the node is minus the residual's term
+                F, power = p.friction(X0, X1, *V, w, self.rule)
+                vals = vals - F
+                lost -= self.h * float(np.sum(power))
+            b.setValues(self._free(p.indices(pairs, "v").ravel()), np.ascontiguousarray(vals.ravel()),
+                        addv=PETSc.InsertMode.ADD)
+        self.dissipated = self.comm.bcast(lost, root=0)
         self.seconds["forces"] += time.process_time() - start
 
     def jacobian(self, X, A):
         start = time.process_time()
-        for p, pairs, X0, X1, w in self._terms:
-            rows, cols = p.indices(pairs, "v").reshape(-1, 12), p.indices(pairs, "q").reshape(-1, 12)
+        for p, pairs, X0, X1, w, V in self._terms:
+            rows = self._free(p.indices(pairs, "v").reshape(-1, 12))
             blocks = w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule)
-            for r, c, block in zip(rows, cols, blocks):
-                rk = [k for k, g in enumerate(r) if int(g) not in self.fixed]
-                ck = [k for k, g in enumerate(c) if int(g) not in self.fixed]
-                if rk and ck:
-                    A.setValues(r[rk].astype(PETSc.IntType), c[ck].astype(PETSc.IntType),
-                                np.ascontiguousarray(block[np.ix_(rk, ck)]), addv=PETSc.InsertMode.ADD)
+            parts = [(self._free(p.indices(pairs, "q").reshape(-1, 12)), blocks)]
+            if V is not None:
+                dq, dv = p.friction_jacobian(X0, X1, *V, w, self.rule)
+                parts[0] = (parts[0][0], parts[0][1] - dq)
+                parts.append((self._free(p.indices(pairs, "v").reshape(-1, 12)), -dv))
+            for cols, blocks in parts:
+                for r, c, block in zip(rows, cols, np.ascontiguousarray(blocks)):
+                    A.setValues(r, c, block, addv=PETSc.InsertMode.ADD)
         self.seconds["matrix"] += time.process_time() - start
+
+    def _friction_columns(self, p):
+        """name.Ft_x, _y, _z: the friction force on body a (zero for self-contact), and name.Mf_x, _y, _z: the
+        moment sum (x_c - y_c)_m x f of the pairs' force couples (module docstring of forms/rod_contact.py),
+        of the last step (its last Newton iterate)."""
+        Ft, Mf = np.zeros(3), np.zeros(3)
+        for q, pairs, X0, X1, w, V in self._terms:
+            if q is not p or V is None:
+                continue
+            F, _ = p.friction(X0, X1, *V, w, self.rule)
+            Xm = 0.5 * (X0 + X1)
+            if not p.self_contact:
+                Ft += (F[:, 0] + F[:, 1]).sum(axis=0)
+            Mf += np.cross(Xm, F).sum(axis=(0, 1))
+        out = {f"{p.name}.Ft_{c}": float(v) for c, v in zip("xyz", Ft)}
+        out.update({f"{p.name}.Mf_{c}": float(v) for c, v in zip("xyz", Mf)})
+        return out
 
     # -- the system's view ------------------------------------------------------------------------
     def _state(self, X):
@@ -345,6 +472,8 @@ class BodyContacts:
                     obs[f"{p.name}.Fn_{c}"] = float(f)
                 obs[f"{p.name}.penetration"] = float(np.max(p.R - d, initial=0.0))
                 obs[f"{p.name}.active"] = float(len(pairs))
+                if self.rubs and getattr(p.law, "friction", None) is not None:
+                    obs.update(self._friction_columns(p))
         return self.comm.bcast(obs, root=0)
 
 

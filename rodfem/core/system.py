@@ -549,7 +549,7 @@ class System:
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
         if self.body_contacts is not None:
-            self.body_contacts.step(self.X0)
+            self.body_contacts.step(self.X0, self.dt)
         return self.newton.solve(step, t)
 
     def accept(self):
@@ -601,11 +601,13 @@ class System:
         mine = any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
         if self.distributed:   # (the bodies of other ranks)
             mine = self.comm.allreduce(mine, op=MPI.LOR)
-        return mine or any(c.dissipative for c in self.components)
+        return (mine or any(c.dissipative for c in self.components)
+                or (self.body_contacts is not None and self.body_contacts.rubs))
 
     def dissipated_energy(self) -> float:
-        """h d_n of the last step: the sum over the dissipating bodies and dampers."""
-        return self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
+        """h d_n of the last step: the sum over the dissipating bodies, dampers and the contacts' friction."""
+        return (self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
+                + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
 
     def observe(self) -> dict:
         """The history's columns of the state x_{n+1}."""
@@ -817,6 +819,11 @@ class Couplings:
     def jacobian(self, X, A):
         for p in self.parts:
             p.jacobian(X, A)
+
+    def grow(self):
+        out = [g() for g in (getattr(p, "grow", None) for p in self.parts) if g is not None]
+        out = [e for e in out if e is not None]
+        return [x for e in out for x in e] if out else None
 
 
 class JointRows:

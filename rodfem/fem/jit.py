@@ -31,6 +31,7 @@ import errno
 import fcntl
 import functools
 import inspect
+import logging
 import os
 import sys
 import time
@@ -213,6 +214,8 @@ def locked(comm):
     if outer:
         _held.update(root=comm.rank == 0, fd=None, error=None)
     _held["depth"] += 1
+    quiet = logging.root.manager.disable
+    logging.disable(max(quiet, logging.INFO))  # the C build (setuptools) logs every compiler call at INFO
     try:
         if outer and not HOOKED:
             with agreed(comm):
@@ -226,6 +229,7 @@ def locked(comm):
             raise
         raise error from None
     finally:
+        logging.disable(quiet)
         _held["depth"] -= 1
         if outer and _held["fd"] is not None:
             os.close(_held["fd"])  # releases the lock

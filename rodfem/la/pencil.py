@@ -64,6 +64,7 @@ from scipy.sparse.linalg import splu
 
 OSCILLATORY = 1e-4    # omega > 1e-4 |s|: an oscillation (the roundoff on a real cluster stays below 1e-6)
 GROWTH = 1e-6         # Re s <= 1e-6 |s|: not growing (a flutter or an unstable state is not a natural mode)
+ZERO = 1e-9           # |s| <= 1e-9 of the median |s|: a zero eigenvalue (neutral; no sign to read)
 SHIFT = 1.0           # rad/s: the real shift sigma of the SLEPc operator
 RESIDUAL_TOL = 1e-10  # backward error of a verified eigenpair
 ROW_TOL = 1e-3        # row-wise backward error of a verified eigenpair
@@ -188,6 +189,36 @@ class Pencil:
         s = np.array([p[0] for p in pairs], dtype=complex)
         Y = np.column_stack([p[1] for p in pairs]) if pairs else np.zeros((self.n, 0), complex)
         return Modes(s, self.dc[:, None] * Y, np.array([p[2] for p in pairs], dtype=float), info)
+
+
+def growing_eigenvalues(p, limit=50):
+    """The verified eigenvalues with Re s > GROWTH |s| (real or complex: an unstable equilibrium's
+    divergence e^{sigma t}, or a flutter), from QZ of the whole pencil, ascending in |s|, and the
+    number of finite eigenvalues |s| <= ZERO of the median |s| (a mechanism's or free body's
+    zeros: neutral, neither growing nor decaying, and too close to 0 for a sign).  Of the
+    candidates (at most `limit`, smallest |s| first) each is refined and verified as the modes
+    are (`refine`, `verify`): roundoff images of the infinite eigenvalues are not results.
+    Returns (s verified, zeros, candidates tried, candidates rejected)."""
+    import scipy.linalg
+    w = scipy.linalg.eigvals(p.A.toarray(), p.E.toarray())
+    w = w[np.isfinite(w)]
+    if not len(w):
+        return np.zeros(0, complex), 0, 0, 0
+    scale = float(np.median(np.abs(w)))
+    zero = np.abs(w) <= ZERO * scale
+    candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]
+    candidates = candidates[np.argsort(np.abs(candidates))][:limit]
+    rng = np.random.default_rng(12)
+    keep, rejected = [], 0
+    for s0 in candidates:
+        pair = p.refine(complex(s0), rng.standard_normal(p.n) + 0j)
+        if pair is not None and pair[0].real > GROWTH * abs(pair[0]):
+            eta, omega = p.verify(*pair)
+            if eta <= RESIDUAL_TOL and omega <= ROW_TOL:
+                keep.append(pair[0])
+                continue
+        rejected += 1
+    return np.array(keep, dtype=complex), int(np.sum(zero)), len(candidates), rejected
 
 
 def dense_modes(p, k):

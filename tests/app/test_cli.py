@@ -67,6 +67,7 @@ BAD_INPUT = [
     # --set without '='
     (["run", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
     (["study", "roll-up-2d", "--set", "dt"], ["--set expects NAME=VALUE", "'dt'"]),
+    (["reduce", "cantilever-2d", "--nonlinear", "--test", "fy"], ["--test expects NAME=VALUE", "'fy'"]),
 ]
 
 

@@ -38,3 +38,28 @@ def test_a_full_disk_under_the_jit_cache_is_one_line(tmp_path):
     assert p.returncode == 2 and len(lines) == 1, p.stderr[-2000:]
     assert lines[0].startswith(f"rodfem: error: the JIT cache {tmp_path / 'cache' / 'fenics'} cannot be written (File too large)")
     assert json.loads((out / "summary.json").read_text())["status"] == "error"
+
+
+def test_compilation_logs_nothing_through_the_python_api(caplog):
+    """Inside `jit.locked` (where forms compile) the C build's INFO lines are dropped: the Python API
+    used to print a dozen `INFO:root:x86_64-linux-gnu-gcc ...` lines per form compiled.  Logging at
+    INFO works again after the block, and an outer `logging.disable` is restored, not cleared."""
+    import logging
+
+    from mpi4py import MPI
+
+    from rodfem.fem import jit
+    caplog.set_level(logging.INFO)
+    with jit.locked(MPI.COMM_SELF):
+        logging.getLogger().info("gcc -shared libffcx_forms.o")
+        logging.getLogger().warning("a warning still shows")
+    logging.getLogger().info("after the build")
+    assert "gcc" not in caplog.text
+    assert "a warning still shows" in caplog.text and "after the build" in caplog.text
+    logging.disable(logging.WARNING)
+    try:
+        with jit.locked(MPI.COMM_SELF):
+            pass
+        assert logging.root.manager.disable == logging.WARNING
+    finally:
+        logging.disable(logging.NOTSET)

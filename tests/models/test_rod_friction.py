@@ -1,0 +1,211 @@
+"""Friction between rods (forms/rod_contact.py's `friction`, rodfem/core/bodycontact.py) against independent
+answers: a short rod sliding across a clamped rod under gravity decelerates as a block on a rough table
+(a = mu_k g, stopping distance v0^2 / (2 mu_k g)); pulled below the static threshold it creeps at the
+regularized law's slip eps r / sqrt(1 - r^2) (r = pull / (mu_s N)), above it it accelerates at
+(pull - mu_k N) / m; two free rods rubbing keep their total linear momentum to round-off, their angular
+momentum changes by exactly the friction couples' moment, H - supplied + dissipated is exact and the
+friction never does positive work; the contact's matrix pattern grown at once gives the history of the
+pattern grown entry by entry; bad input; mpirun -n 2 = serial."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from processes import assert_same_rows, script_on_ranks
+from scipy.optimize import brentq
+from test_rod_contact import hairpin
+
+from rodfem import Load, Support, System, run
+from rodfem.core.bodycontact import BodyContacts, close_pairs
+from rodfem.demos.rod_collision import scene, straight
+from rodfem.errors import InputError
+from rodfem.forms import cosserat_rod
+from rodfem.forms.contact import Coulomb, stiffness_for
+from rodfem.forms.rod_contact import RodContact
+
+G, R_TUBE, RHO = 9.81, 0.01, 1750.0
+FRICTION = Coulomb(mu_s=0.4, mu_k=0.2, eps=2e-4, v_s=1e-3)
+
+
+def column(result, name):
+    return np.array([row[name] for row in result.rows])
+
+
+def rod_model(E, r=R_TUBE, rho=RHO):
+    A, Isec = np.pi * r**2, np.pi * r**4 / 4
+    Gs = E / 3
+    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec), [1 / (E * A), 1 / (Gs * A), 1 / (Gs * A)],
+                                    [1 / (Gs * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
+
+
+def block_on_rod(v0=0.0, pull=0.0, friction=FRICTION, La=0.1):
+    """Rod a (length La, along y, 2 elements) lies across the clamped rod b (along x, 4 elements) under
+    gravity, moving along x at v0 and pulled along x by the force `pull` (a fraction of mu_s W); a's
+    crossing point is its middle node, b's the middle of a segment.  Returns (system, mass of a)."""
+    model = rod_model(1e9)
+    m = model.rhoA * La
+    W = m * G
+    k = stiffness_for(W, 1e-4)
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-13, "snes_max_it": 40})
+    z = 2 * R_TUBE - 1e-4 / np.sqrt(2)   # at rest: two segment pairs of a (meeting at its middle node) carry W
+    x0 = 0.2 / 16
+    a = s.add("a", model, La, 2, initial=straight((x0, 0, z), (0, 1, 0), (0, 0, 1), (v0, 0, 0), La),
+              loads=[Load("v", [pull * FRICTION.mu_s * W / La, 0.0, -model.rhoA * G], "domain", "weight")])
+    b = s.add("b", model, 0.2, 4, initial=straight((0, 0, 0), (1, 0, 0), (0, 0, 1), (0, 0, 0), 0.2),
+              supports=[Support("left"), Support("right")])
+    s.contact(RodContact(k, R_TUBE, friction=friction), a, b, name="rub")
+    s.marker("a0", a.start)
+    return s, m
+
+
+def test_a_rod_sliding_across_a_clamped_rod_stops_like_a_block():
+    """v0 = 0.05 m/s: while sliding (v > 5 v_s) the velocity falls at mu_k g to 1.5 % (N oscillates by ~8 %
+    about the weight: the rods ring), the rod stops after v0^2 / (2 mu_k g) = 0.64 mm to 1 % and then stays
+    (|v| < 3 eps, the regularization's creep level); every step's friction work is <= 0 and the balance exact."""
+    v0, mu, h = 0.05, FRICTION.mu_k, 1e-3
+    s, m = block_on_rod(v0=v0)
+    result = run(s, h, 0.035)
+    t, x = column(result, "t"), column(result, "a0_x")
+    v, tm = np.diff(x) / h, 0.5 * (t[1:] + t[:-1])
+    sliding = v > 5 * FRICTION.v_s
+    slope = np.polyfit(tm[sliding], v[sliding], 1)[0]
+    assert slope == pytest.approx(-mu * G, rel=1.5e-2)
+    assert x[-1] - x[0] == pytest.approx(v0**2 / (2 * mu * G), rel=1e-2)
+    assert np.abs(v[tm > 0.03]).max() < 3 * FRICTION.eps
+    its = column(result, "newton_its")[1:]   # the friction's derivatives in Newton's matrix: few iterations,
+    assert its[sliding].max() <= 4 and its.sum() <= 200   # more (<= 12) where the slip meets eps: 165 in all
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.sum() > 0.9 * 0.5 * m * v0**2
+    assert result.max_balance_error <= 1e-12 * 0.5 * m * v0**2
+
+
+def creep(pull, W):
+    """The regularized law's steady slip under the pull force pull mu_s W at N = W: -factor(W, v^2) v = pull mu_s W
+    on the creeping branch (v < 5 eps)."""
+    return brentq(lambda u: -FRICTION.factor(W, u * u) * u - pull * FRICTION.mu_s * W, 0.0, 5 * FRICTION.eps)
+
+
+@pytest.mark.parametrize("pull", [0.5, 1.5], ids=["below-threshold", "above-threshold"])
+def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
+    """At rest on the clamped rod, pulled along x by pull mu_s W.  Below the threshold (pull = 0.5) the rod
+    creeps at the regularized law's steady slip (1.17e-4 m/s, eps-level) on average to 2 % (N rings by ~7 %
+    about W, the creep is convex in N), never above 2 eps; above it (1.5) the friction drops to mu_k N and
+    the rod accelerates at (1.5 mu_s - mu_k) g to 1 %."""
+    s, m = block_on_rod(pull=pull)
+    h = 1e-3
+    result = run(s, h, 0.03)
+    t, x = column(result, "t"), column(result, "a0_x")
+    v, tm = np.diff(x) / h, 0.5 * (t[1:] + t[:-1])
+    late = t >= 0.015
+    if pull < 1:
+        mean = (x[-1] - x[late][0]) / (t[-1] - t[late][0])
+        assert mean == pytest.approx(creep(pull, m * G), rel=2e-2)
+        assert np.abs(v[tm > 0.015]).max() < 2 * FRICTION.eps
+    else:
+        slope = np.polyfit(tm[tm > 0.015], v[tm > 0.015], 1)[0]
+        assert slope == pytest.approx((pull * FRICTION.mu_s - FRICTION.mu_k) * G, rel=1e-2)
+    assert np.diff(column(result, "dissipated")).min() >= 0
+    assert result.max_balance_error <= 1e-12 * max(np.abs(column(result, "H")).max(), 1e-12)
+
+
+def rub(system=False, **over):
+    p = scene.values({"mu": 0.3, "slide": 0.1, "offset_a": 0.1, "offset_b": 0.05, "t_end": 0.03, "dt": 1e-3, **over})
+    s = scene.build(p, MPI.COMM_WORLD)
+    result = run(s, p["dt"], p["t_end"])
+    return (p, result, s) if system else (p, result)
+
+
+@pytest.mark.parametrize("rule", ["discrete-gradient", "midpoint"])
+def test_two_free_rods_rubbing_keep_momentum_and_the_balance(rule):
+    """The rod-collision scene with mu = 0.3 and the rods sliding across each other at 0.1 m/s: the friction
+    acts (|F_t| reaches mu N to 2 %), the total momentum p stays at its initial value to round-off; the
+    angular momentum changes by exactly h touch.Mf each step (the friction couples' moment, bounded by
+    R mu N); every step's friction work is <= 0; with the discrete gradient H + dissipated is constant to
+    round-off."""
+    p, result = rub(integrator=rule)
+    scale = 0.5 * RHO * np.pi * R_TUBE**2 * p["L"] * p["V"]
+    for k in ("p_x", "p_y", "p_z"):
+        assert np.abs(column(result, k) - result.rows[0][k]).max() <= 1e-14 * scale, k
+    N, Ft = column(result, "touch.N"), np.hypot(column(result, "touch.Ft_x"), column(result, "touch.Ft_y"))
+    assert N.max() > 0 and Ft[np.argmax(N)] == pytest.approx(p["mu"] * N.max(), rel=2e-2)
+    Mf = np.column_stack([column(result, f"touch.Mf_{c}") for c in "xyz"])
+    L = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
+    assert np.abs(Mf).max() > 0
+    assert np.linalg.norm(Mf, axis=1).max() <= 2 * R_TUBE * p["mu"] * N.max() * (1 + 1e-9)
+    assert np.abs(np.diff(L, axis=0) - p["dt"] * Mf[1:]).max() <= 1e-13 * scale * p["L"]
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.max() > 0
+    if rule == "discrete-gradient":
+        assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+
+
+def test_self_contact_with_friction_keeps_momentum_and_the_balance():
+    """The hairpin of the self-contact test (one rod whose legs swing into each other) with mu = 0.5 between
+    its legs: the legs touch (and rub as they bend), the linear momentum stays at its initial value to
+    round-off, the friction's work is never positive and H - supplied + dissipated is exact."""
+    s, KE, k = hairpin(contact=False)
+    s.contact(RodContact(k, R_TUBE, friction=Coulomb(0.5)), s.bodies["hairpin"], name="self")
+    result = run(s, 8e-4, 0.064)
+    assert column(result, "self.N").max() > 0
+    for key in ("p_x", "p_y", "p_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14, key
+    assert np.allclose(column(result, "self.Ft_x"), 0.0)   # (self-contact: no force "on body a")
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.max() > 0
+    assert result.max_balance_error <= 1e-12 * KE
+
+
+def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
+    """The contact's entries added to the matrix pattern in one re-preallocation (`grow`) against PETSc
+    inserting them as new nonzeros: the same history to the solver's tolerance (rubbing rods, 6 elements);
+    with the pattern grown PETSc never reallocates (MatGetInfo's mallocs: 0), without it does."""
+    _, grown, s = rub(system=True, n_elements=6, t_end=0.02)
+    assert s.assembler.A.getInfo()["mallocs"] == 0
+    monkeypatch.setattr(BodyContacts, "grow", lambda self: None)
+    _, inserted, s = rub(system=True, n_elements=6, t_end=0.02)
+    assert s.assembler.A.getInfo()["mallocs"] > 0
+    for key in ("H", "dissipated", "L_y", "touch.N", "touch.Ft_x", "pz_a", "pz_b"):
+        a, b = column(grown, key), column(inserted, key)
+        assert np.abs(a - b).max() <= 1e-9 * max(np.abs(b).max(), 1e-12), key
+
+
+def test_broad_phase_between_two_bodies_finds_every_overlap():
+    """The two bodies' spheres in two k-d trees (no pair within one body visited): exactly the overlapping
+    pairs of a brute force, for spheres of different sizes on the two sides."""
+    rng = np.random.default_rng(3)
+    a, b = rng.random((300, 3)), rng.random((200, 3))
+    ra, rb = 0.01 + 0.01 * rng.random(300), 0.05 + 0.05 * rng.random(200)
+    found = {tuple(p) for p in close_pairs(a, ra, b, rb)}
+    brute = np.linalg.norm(a[:, None] - b[None], axis=2) <= ra[:, None] + rb[None]
+    assert found == set(zip(*np.nonzero(brute))) and len(found) > 50
+
+
+def test_bad_friction_is_refused_in_one_line():
+    with pytest.raises(InputError, match="friction must be a Coulomb"):
+        RodContact(1.0, 0.01, friction=0.3)
+    with pytest.raises(InputError, match="mu_k must be in"):
+        RodContact(1.0, 0.01, friction=Coulomb(0.2, 0.4))
+    with pytest.raises(InputError, match="mu"):
+        scene.values({"mu": -1.0})
+
+
+SCRIPT = """
+import json
+from mpi4py import MPI
+import rodfem
+from rodfem.demos.rod_collision import scene
+p = scene.values({"t_end": 0.02, "dt": 1e-3, "offset_a": 0.1, "offset_b": 0.05, "E": 1e8, "mu": 0.3, "slide": 0.1})
+result = rodfem.run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
+if MPI.COMM_WORLD.rank == 0:
+    row = result.rows[-1]
+    row.pop("wall_time", None)
+    print(json.dumps(row))
+"""
+
+
+@pytest.mark.mpi
+def test_rubbing_rods_in_parallel_equal_serial():
+    """Two rods rubbing (8 elements per rod over 2 ranks: velocities gathered with the positions, the friction's
+    dissipation broadcast) under mpirun -n 2 write the serial history; the friction is on at the end."""
+    serial, parallel = script_on_ranks(SCRIPT, timeout=600)
+    assert serial["touch.N"] > 0 and serial["dissipated"] > 0
+    assert_same_rows(serial, parallel)
