@@ -30,13 +30,13 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 
 
-def chain(N, total=128):
+def chain(N, total=128, distribute=None):
     """The chain of N beams (each total // N elements, at least one)."""
     from rodfem import Load, Support
     from rodfem.core.system import System
     from rodfem.forms import joints
     from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
-    s = System()
+    s = System(distribute=distribute)
     w, rho, E = 0.01, 7800.0, 2e9
     A, I = w * w, w ** 4 / 12
     model = PlanarBeam(rho * A, rho * I, quadratic(EA=E * A, GA=E / 2.6 * A, EI=E * I))

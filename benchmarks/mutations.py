@@ -59,6 +59,7 @@ ROD_FRICTION = "tests/models/test_rod_friction.py"
 STEPPING = "tests/analysis/test_stepping.py"
 BATCH = "tests/core/test_batch.py"
 KINDS = "tests/core/test_kinds.py"
+PLACED = "tests/core/test_distributed_bodies.py"
 THERMO = "tests/models/test_thermoelastic_string.py"
 THERMO_BEAM = "tests/models/test_thermoelastic_beam.py"
 ADAPTIVE = "tests/analysis/test_adaptive_systems.py"
@@ -1149,6 +1150,28 @@ MUTATIONS = [
       [("                parent[root(i)] = root(owner[g])", "                pass")],
       [KINDS + "::test_redundant_joint_in_a_long_chain_is_refused"],
       "the joints' rank check treats joints sharing velocities as independent (a redundant pin passes)"),
+    # -- bodies placed whole on ranks (rodfem/core/placement.py) ------------------------------------
+    M("placed-multipliers-overlap", "rodfem/fem/assembly.py",
+      [("            lo = bodies_end[r] + used.get(r, 0)", "            lo = bodies_end[r]")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "the joints of one rank share their multipliers' rows (each joint's multipliers not after the last one's)"),
+    M("placed-step-not-set", "rodfem/core/system.py",
+      [("        self._h_set = self.dt if self._ready or not self.distribute else None   # (placed bodies: built later)",
+        "        self._h_set = self.dt")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "a body built on its rank keeps h = 1 when the run set the step before the build"),
+    M("placed-point-on-rank-start", "rodfem/core/system.py",
+      [("                return np.array([layout.body_start[i] + np.asarray(d, np.int64) for d in (pc.q_dofs, pc.v_dofs)])",
+        "                return np.array([layout.start + np.asarray(d, np.int64) for d in (pc.q_dofs, pc.v_dofs)])")],
+      [PLACED + "::test_chain_on_ranks_equals_serial"],
+      "a joint's point on another rank's body read at this rank's dofs"),
+    M("placed-error-kept-local", "rodfem/core/system.py",
+      [("        found = self.comm.allgather(None if error is None else (type(error), str(error)))\n"
+        "        if error is not None:\n            raise error\n",
+        "        if error is not None:\n            raise error\n"
+        "        found = self.comm.allgather(None)\n")],
+      [PLACED + "::test_error_on_one_rank_stops_every_rank"],
+      "a body that fails on its rank raises there only (the other ranks wait for it)"),
     # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
     M("stability-sign", "rodfem/la/pencil.py",
       [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",

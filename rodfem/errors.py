@@ -69,12 +69,26 @@ def agreed(comm):
         yield
     except InputError as e:
         error = e
+    wait_idle(comm)   # (rank 0 writes files meanwhile: the others wait without taking a core from it)
     messages = comm.allgather(None if error is None else str(error))
     if error is not None:
         raise error
     first = next((m for m in messages if m is not None), None)
     if first is not None:
         raise InputError(first)
+
+
+def wait_idle(comm, interval=2e-4):
+    """Wait until every rank of `comm` has come here, sleeping between looks (a non-blocking barrier
+    tested every `interval` seconds; collective).  MPI's blocking calls wait by polling, which keeps a
+    core busy: on a machine with as many cores as ranks (or fewer), a rank waiting while another
+    writes a run's files takes the core that the writing rank or the machine's other work needs."""
+    if comm.size == 1:
+        return
+    import time
+    request = comm.Ibarrier()
+    while not request.Test():
+        time.sleep(interval)
 
 
 def out_of_memory(error):

@@ -256,22 +256,22 @@ class Statics:
         tangent at lambda = 0 (its stiffness is lambda . Q); from the fitted reactions Newton starts
         with the right one."""
         layout = self.target.layout
-        n = layout.n_multipliers
+        n = len(layout.multipliers)
         if not n:
             return
-        at = layout.multipliers - layout.start if self.comm.rank == 0 else np.zeros(0, dtype=int)
+        k, at = layout.owned_multipliers()   # (this rank's multipliers: all on rank 0, or a joint's on its rank)
         b = self.unknown.duplicate()
 
         def residual(lam):
-            self.unknown.getArray()[at] = lam
+            self.unknown.getArray()[at] = lam[k]
             self.assembler.residual(self.unknown, b)
             return np.concatenate(self.comm.allgather(b.getArray(readonly=True).copy()))
-        r0 = residual(np.zeros(len(at)))
+        r0 = residual(np.zeros(n))
         columns = []
         for i in range(n):
-            columns.append(residual(np.eye(n)[i] if len(at) else np.zeros(0)) - r0)
+            columns.append(residual(np.eye(n)[i]) - r0)
         lam = np.linalg.lstsq(np.column_stack(columns), -r0, rcond=None)[0]
-        self.unknown.getArray()[at] = lam if len(at) else np.zeros(0)
+        self.unknown.getArray()[at] = lam[k]
         b.destroy()
 
     @property

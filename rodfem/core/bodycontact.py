@@ -481,9 +481,9 @@ class BodyContacts:
 def fixed_dofs(system, layout):
     """The global indices of the bodies' Dirichlet dofs (the same set on every rank)."""
     fixed = []
-    for i, r in enumerate(system.bodies.values()):
+    for i, (_, body) in enumerate(system.body_items()):   # (this rank's bodies: its blocks)
         own = layout.sizes[i]
-        for bc in r.body.bcs:
+        for bc in body.bcs:
             dofs, n_owned = bc.dof_indices()
             fixed += [layout.start + layout.offsets[i] + int(d) for d in dofs[:n_owned] if d < own]
     return set(np.concatenate(system.comm.allgather(np.array(fixed, dtype=np.int64))).tolist())

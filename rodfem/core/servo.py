@@ -236,7 +236,7 @@ def start_multipliers(system):
     if system.comm.rank == 0:
         rows = sorted({int(g) for j in system.joints for k, g in enumerate(j.v_index) if k in j.rows})
         where = {g: i for i, g in enumerate(rows)}
-        C, rhs = np.zeros((len(rows), system.layout.n_multipliers)), np.zeros(len(rows))
+        C, rhs = np.zeros((len(rows), len(system.layout.multipliers))), np.zeros(len(rows))
         position = {int(g): k for k, g in enumerate(points.wanted)}
         for g in rows:
             rhs[where[g]] = -r[position[g]]
@@ -248,9 +248,9 @@ def start_multipliers(system):
                 C[where[int(j.v_index[k])], j.offset:j.offset + j.size] += columns[k]
         lam = np.linalg.lstsq(C, rhs, rcond=None)[0]
     lam = system.comm.bcast(lam, root=0)
+    k, at = system.layout.owned_multipliers()
     for X in (system.X0, system.X1):
-        if system.comm.rank == 0:
-            X.getArray()[system.layout.multipliers] = lam
+        X.getArray()[at] = lam[k]
     # no step has been taken: x_0 is observed at its own time (the t = 0 row's constraint residual
     # |g(q_0) - path(t_0)|, not against path(t_0 + h) with whatever h the system had when built)
     points.x0_values, points.times = before

@@ -29,15 +29,18 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from rodfem.common.limits import check_elements
 from rodfem.core.body import Body
 from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joints import Frame, Joint, MovingGround, Point
 from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
+from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
+from rodfem.core.spaces import dofs_per_element
 from rodfem.errors import ConstraintError
-from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, allreduce_max
+from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max
 from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
@@ -78,21 +81,28 @@ class BodyRef:
 class System:
     """Bodies and joints as one discrete PH system (see the module docstring)."""
 
+    distribute = False  # the default under mpirun: every body's mesh over all ranks (rodfem/core/placement.py)
     batch = True   # the default: bodies of the same compiled forms assembled together (serial)
     share = True   # the default: bodies of one kind share their mesh and compiled forms (rodfem/core/kinds.py)
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
-                 momentum: Optional[bool] = None, batch: Optional[bool] = None, share: Optional[bool] = None):
+                 momentum: Optional[bool] = None, batch: Optional[bool] = None, share: Optional[bool] = None,
+                 distribute: Optional[bool] = None):
         """momentum: write the total momentum maps p, L (about the origin) to the history; by
         default only for a free system (nothing supported or grounded), where they are conserved
         when no load acts.  batch: bodies of the same compiled forms assembled together
-        (rodfem/fem/batch.py; serial); False: body by body; None: `System.batch`.  share: bodies of one
-        kind share their mesh, state space and compiled forms (rodfem/core/kinds.py); None: `System.share`."""
+        (rodfem/fem/batch.py); False: body by body; None: `System.batch`.  share: bodies of one
+        kind share their mesh, state space and compiled forms (rodfem/core/kinds.py); None: `System.share`.
+        distribute: under mpirun, each body whole on one rank (rodfem/core/placement.py: many small
+        bodies); False: every body's mesh over all ranks; None: `System.distribute`."""
         self.integrator, self.comm, self.newton_options = integrator, comm, newton_options
         if batch is not None:
             self.batch = batch
         if share is not None:
             self.share = share
+        if distribute is not None:
+            self.distribute = bool(distribute)
+        self.distribute = self.distribute and comm.size > 1
         self.t = 0.0   # the time of the state x_n (the time loop advances it)
         self.dt = 1.0  # the step h
         self.momentum = momentum
@@ -116,6 +126,8 @@ class System:
         return self._place(name, model, length, n_elements, loads, supports, initial, contacts)
 
     def _place(self, name, model, length, n_elements, loads, supports, initial, contacts=()):
+        if self.distribute:   # (built on its rank when the system is built: rodfem/core/placement.py)
+            return self._place_later(name, model, length, n_elements, loads, supports, initial, contacts)
         if self._ready:
             raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
                                   "add every body before the first run")
@@ -124,6 +136,17 @@ class System:
         body = Body(model, length, n_elements, loads, supports, initial, self.integrator, self.comm, name, contacts,
                     shared=self._meshes)
         ref = BodyRef(name, body)
+        self.bodies[name] = ref
+        return ref
+
+    def _place_later(self, name, model, length, n_elements, loads, supports, initial, contacts=()):
+        """A body to be built on its rank by `build` (a Placement until then; rodfem/core/placement.py)."""
+        if self._ready:
+            raise ConstraintError(f"body {name or model}: the system has been built (it has run); "
+                                  "add every body before the first run")
+        check_elements(n_elements, dofs_per_element(model.fields), MPI.COMM_SELF)
+        ref = BodyRef(name, Placement(model, length, n_elements, loads, supports, initial, self.integrator, name,
+                                      contacts))
         self.bodies[name] = ref
         return ref
 
@@ -234,6 +257,9 @@ class System:
         refs = list(self.bodies.values())
         if not refs:
             raise ConstraintError("a system needs at least one body")
+        if self.distribute:
+            self._place_on_ranks(refs)
+        local = self._local_refs()
         # the unnamed body of a Problem writes its own columns (tip or mean position, momentum
         # maps when unsupported, its ports' columns); a System's bodies their total momentum maps,
         # and the system its markers, joints and recorders
@@ -241,15 +267,16 @@ class System:
         free = not any(r.body.supports for r in refs) and not any(
             j.a.body is None or j.b.body is None for j in self.joints + self.components)
         momentum = not self.single and (self.momentum or (self.momentum is None and free))
-        templates = self._templates(refs)   # body name -> the first body of its kind (rodfem/core/kinds.py)
-        forms = self._forms([r for r in refs if r.name not in templates], momentum)
+        templates = self._templates(local)   # body name -> the first body of its kind (rodfem/core/kinds.py)
+        forms = self._forms([r for r in local if r.name not in templates], momentum)
         kinds = {t.name: t for t in templates.values()}
         alone = {n for n, t in kinds.items() if not shareable(t.body, {k: f for (m, k), f in forms.items() if m == n})}
         if alone:   # (a kind whose forms hold objects neither the bodies' nor the model's: body by body)
-            forms.update(self._forms([r for r in refs if templates.get(r.name, r).name in alone
+            forms.update(self._forms([r for r in local if templates.get(r.name, r).name in alone
                                       and r.name in templates], momentum))
             templates = {n: t for n, t in templates.items() if t.name not in alone}
         self.kinds = {n: t.name for n, t in templates.items()}   # body -> the body whose compiled forms it shares
+        self._shared = self._share_points() if self.distributed else None
         size = 0
         for j in self.joints:
             j.offset = size
@@ -264,18 +291,23 @@ class System:
             own = {k: forms[(t.name, k)] for k in keys[t.name]}
             twins = twin_forms(t.body, self.bodies[name].body, own, {k: compiled[(t.name, k)] for k in own})
             compiled.update({(name, k): f for k, f in twins.items()})
-        self.compiled = {(r.name, k): compiled[(r.name, k)] for r in refs for k in keys[templates.get(r.name, r).name]}
+        self.compiled = {(r.name, k): compiled[(r.name, k)] for r in local for k in keys[templates.get(r.name, r).name]}
         self.columns = [k for (_, k) in self.compiled if k.startswith("obs:")]
         self.columns = list(dict.fromkeys(self.columns))
         if not self.single:
             self.columns.sort(key=lambda c: ("pL".index(c[4]) if c[4] in "pL" and c[5] == "_" else 2, c))
-        self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
+        if self.distributed:   # each rank: its bodies, then its joints' multipliers
+            order = {id(r): i for i, r in enumerate(refs)}
+            self.layout = RankLayout(self.comm, [r.body.space.V for r in local], [order[id(r)] for r in local],
+                                     [self._joint_owner(j) for j in self.joints], [j.size for j in self.joints])
+        else:
+            self.layout = BlockLayout(self.comm, [r.body.space.V for r in refs], size)
         self._copies = {}
         self.points = PointIndex(self, self.layout) if (self.joints or self.components or self.markers) else None
         self.blocks = [BodyBlock(self.compiled[(r.name, "F")], self.compiled[(r.name, "J")], r.body.x1, r.body.bcs)
-                       for r in refs]
+                       for r in local]
         self.joint_rows = JointRows(self.points) if (self.joints or self.components) else None
-        self.body_contacts = (BodyContacts(self.contacts, refs, self.layout, fixed_dofs(self, self.layout),
+        self.body_contacts = (BodyContacts(self.contacts, local, self.layout, fixed_dofs(self, self.layout),
                                            self.layout.create_vector(), self.integrator) if self.contacts else None)
         parts = [c for c in (self.joint_rows, self.body_contacts) if c is not None]
         self.assembler = BlockAssembler(self.layout, self.blocks,
@@ -294,8 +326,8 @@ class System:
         self._scalar_forms, self._x1_values = {}, np.zeros(self.layout.size_local)
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
-        self._monitored = [(name, r.body) for name, r in self.bodies.items() if r.body.contacts]
-        self._loads = [load for r in refs for load in r.body.loads]
+        self._monitored = [(r.name, r.body) for r in local if r.body.contacts]
+        self._loads = [load for r in local for load in r.body.loads]
         self._ready = True
         return self
 
@@ -333,6 +365,64 @@ class System:
                 forms[(ref.name, "obs:" + f"{ref.name}.{k}")] = f
         return forms
 
+    # -- bodies placed whole on ranks (rodfem/core/placement.py) ------------------------
+    @property
+    def distributed(self) -> bool:
+        """True when the bodies are placed whole on ranks (built: `distribute` and enough bodies)."""
+        return self.distribute and all(isinstance(r.body, Placement) or r.body.comm.size == 1
+                                       for r in self.bodies.values())
+
+    def _place_on_ranks(self, refs):
+        """Build each body on its rank (`owners`); with fewer bodies than ranks, or contact between
+        bodies, every body over all ranks instead (collective: an error on one rank is raised on all)."""
+        if not all(isinstance(r.body, Placement) for r in refs):
+            return
+        spread = len(refs) < self.comm.size or bool(self.contacts)
+        rank = owners([r.body.weight for r in refs], self.comm.size) if not spread else None
+        error = None
+        if not hasattr(self, "_meshes"):
+            self._meshes = Meshes() if self.share else None
+        for k, ref in enumerate(refs):
+            p = ref.body
+            if spread:
+                ref.body = Body(p.model, p.length, p.n_elements, p.loads, p.supports, p.initial, self.integrator,
+                                self.comm, p.name, p.contacts, shared=self._meshes)
+                continue
+            p.owner = int(rank[k])
+            if p.owner == self.comm.rank and error is None:
+                try:
+                    ref.body = p.make(self._meshes)
+                except Exception as err:   # (the other ranks would wait for this one: raise it everywhere)
+                    error = err
+        if spread:
+            self.distribute = False
+            return
+        found = self.comm.allgather(None if error is None else (type(error), str(error)))
+        if error is not None:
+            raise error
+        kind, message = next(f for f in found if f is not None) if any(found) else (None, None)
+        if kind is not None:
+            raise (kind if issubclass(kind, (ConstraintError, ValueError)) else RuntimeError)(message)
+
+    def _local_refs(self):
+        """The BodyRefs of the bodies built on this rank, in the system's order (all of them unless distributed)."""
+        return [r for r in self.bodies.values() if here(r.body)]
+
+    def _share_points(self):
+        """{id(point): PointCoordinates} of the joints', components' and markers' points (rodfem/core/placement.py)."""
+        points = [p for item in self.joints + self.components for p in getattr(item, "points", (item.a, item.b))
+                  if p.body is not None] + list(self.markers.values())
+        return {id(p): pc for p, pc in zip(points, share_points(points, self.comm))}
+
+    def _point_coordinates(self, p):
+        """The PointCoordinates of a body's point (collective unless the bodies are placed on ranks)."""
+        return self._shared[id(p)] if self._shared is not None else point_coordinates(p, self.comm)
+
+    def _joint_owner(self, joint):
+        """The rank of a joint's multipliers: that of its first body (distributed bodies)."""
+        p = next(p for p in getattr(joint, "points", (joint.a, joint.b)) if p.body is not None)
+        return p.body.body.owner if isinstance(p.body.body, Placement) else self.comm.rank
+
     def set_newton_options(self, options: Optional[dict]):
         """A new Newton with these options (the matrix and assembly are kept)."""
         self.build()
@@ -369,7 +459,7 @@ class System:
         """The coordinates of a joint's or component's two points (a servo's: all of them): (sides,
         frame builders, q(0), scale)."""
         points = getattr(item, "points", (item.a, item.b))
-        sides = [None if p.body is None else point_coordinates(p, self.comm) for p in points]
+        sides = [None if p.body is None else self._point_coordinates(p) for p in points]
         frames, q0s, scale = [], [], 1.0
         for k, (p, side) in enumerate(zip(points, sides)):
             if side is None:   # the ground: a fixed frame, of the dimension of the first body point
@@ -389,7 +479,7 @@ class System:
     def _segments(self, which):
         """The bodies' Functions x0 or x1 as segments of the block vector (one C call copies them all)."""
         if which not in self._copies:
-            self._copies[which] = Segments([getattr(r.body, which) for r in self.bodies.values()],
+            self._copies[which] = Segments([getattr(r.body, which) for r in self._local_refs()],
                                            [blk.lo for blk in self.blocks], [blk.hi - blk.lo for blk in self.blocks],
                                            self.comm)
         return self._copies[which]
@@ -399,7 +489,7 @@ class System:
 
     def _push(self, X, which):
         self._segments(which).put(X.getArray(readonly=True))
-        if self.comm.size > 1:   # the ghosts
+        if self.comm.size > 1 and not self.distributed:   # the ghosts
             for r in self.bodies.values():
                 getattr(r.body, which).x.scatter_forward()
 
@@ -425,9 +515,9 @@ class System:
         self.dt = float(h)
         if getattr(self, "_h_set", None) == self.dt:   # (every body has it: a step like the last)
             return
-        for r in self.bodies.values():
+        for r in self._local_refs():
             r.body.h.value = h
-        self._h_set = self.dt
+        self._h_set = self.dt if self._ready or not self.distribute else None   # (placed bodies: built later)
 
     def set_time(self, t: float):
         """Inputs u(t) for the step (t = t_{n+1/2})."""
@@ -484,8 +574,10 @@ class System:
         Equations II, Springer 1996, sec. VII.8)."""
         self.build()
         joined = {id(p.body.body) for j in self.joints for p in getattr(j, "points", (j.a, j.b)) if p.body is not None}
-        groups = []
-        for blk, ref in zip(self.blocks, self.bodies.values()):
+        per_body = {}   # body's place in the system -> its groups
+        order = {id(r): i for i, r in enumerate(self.bodies.values())}
+        for blk, ref in zip(self.blocks, self._local_refs()):
+            groups = per_body.setdefault(order[id(ref)], [])
             body, owned = ref.body, blk.hi - blk.lo
             algebraic = set(body.algebraic_fields())
             constrained = bool(algebraic) or id(body) in joined
@@ -500,7 +592,13 @@ class System:
                     continue
                 q = velocity_of.get(f.name)
                 groups.append((entries(f.name), None if q is None else entries(q)))
-        return groups
+        if self.distributed:   # the groups of the other ranks' bodies, empty here
+            none = np.zeros(0, np.int64)
+            shapes = self.comm.allgather({b: [p is not None for _, p in g] for b, g in per_body.items()})
+            for part in shapes:
+                for b, paired in part.items():
+                    per_body.setdefault(b, [(none, none if p else None) for p in paired])
+        return [g for b in sorted(per_body) for g in per_body[b]]
 
     def state(self):
         """x_{n+1} as an array (the owned entries of this rank)."""
@@ -543,8 +641,9 @@ class System:
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
         if key not in self._scalar_forms:
-            forms = [self.compiled.get((n, key)) for n in self.bodies]
-            self._scalar_forms[key] = Functionals(forms, [r.body.x1 for r in self.bodies.values()],
+            local = self._local_refs()
+            forms = [self.compiled.get((r.name, key)) for r in local]
+            self._scalar_forms[key] = Functionals(forms, [r.body.x1 for r in local],
                                                   [blk.lo for blk in self.blocks], self.layout.size_local, self.batch)
         return self._scalar_forms[key]
 
@@ -569,8 +668,10 @@ class System:
     def dissipates(self) -> bool:
         """True if a body (rodfem/core/model.py: `dissipation`) or a component (a damper) dissipates."""
         self.build()
-        return (any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
-                or any(c.dissipative for c in self.components)
+        mine = any(self.compiled.get((n, "dissipation")) is not None for n in self.bodies)
+        if self.distributed:   # (the bodies of other ranks)
+            mine = self.comm.allreduce(mine, op=MPI.LOR)
+        return (mine or any(c.dissipative for c in self.components)
                 or (self.body_contacts is not None and self.body_contacts.rubs))
 
     def dissipated_energy(self) -> float:
@@ -606,14 +707,14 @@ class System:
     def describe_elements(self):
         if list(self.bodies) == [""]:   # rodfem.Problem's one body
             return next(iter(self.bodies.values())).body.describe_elements()
-        return {name: r.body.describe_elements() for name, r in self.bodies.items()}
+        return {r.name: r.body.describe_elements() for r in self._local_refs()}
 
     def body(self, name):
         return self.bodies[name].body
 
     def body_items(self):
-        """[(name, Body)] in the order of the block vector."""
-        return [(name, ref.body) for name, ref in self.bodies.items()]
+        """[(name, Body)] in the order of the block vector (the bodies of this rank, when placed on ranks)."""
+        return [(ref.name, ref.body) for ref in self._local_refs()]
 
     @property
     def named_bodies(self) -> bool:
@@ -635,6 +736,8 @@ class PointIndex:
 
         def globals_of(pc):
             i = blocks[id(pc.point.body.body)]
+            if layout.distributed:   # (each body whole on one rank: its dofs from its first)
+                return np.array([layout.body_start[i] + np.asarray(d, np.int64) for d in (pc.q_dofs, pc.v_dofs)])
             if i not in l2g:
                 l2g[i] = layout.local_to_global(i)
             own = layout.sizes[i]
@@ -655,7 +758,7 @@ class PointIndex:
             wanted += [j.q_index, j.v_index, j.lam_index]
         self.marker_points = {}
         for name, p in system.markers.items():
-            pc = point_coordinates(p, self.comm)
+            pc = system._point_coordinates(p)
             g = globals_of(pc)
             self.marker_points[name] = (pc, g[0])
             wanted.append(g[0])
@@ -838,7 +941,8 @@ class JointRows:
         self.batch = points.batch if type(self).update is JointRows.update else None
         self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
-        self.work = self.dissipated = self._batch_work = 0.0
+        self._batch_work = 0.0
+        self._sums = (0.0, 0.0)   # (work, dissipated) of the last residual, on rank 0: `work`, `dissipated`
         self._terms = []
 
     def entries(self):
@@ -892,7 +996,22 @@ class JointRows:
                 b.setValues(j.lam_index.astype(PETSc.IntType), np.ascontiguousarray(r_lam), addv=PETSc.InsertMode.ADD)
             work += w
             lost += d
-        self.work, self.dissipated = self.comm.bcast((work, lost), root=0)
+        self._sums = (work, lost)
+
+    def _shared_sums(self):
+        """(work, dissipated) of the last residual, the same on every rank (collective: read by the time
+        loop once a step, not at every residual)."""
+        return self._sums if self.comm.size == 1 else self.comm.bcast(self._sums, root=0)
+
+    @property
+    def work(self):
+        """The driven joints' and the servos' supplied work of the last step (collective)."""
+        return self._shared_sums()[0]
+
+    @property
+    def dissipated(self):
+        """The dampers' dissipated energy of the last step (collective)."""
+        return self._shared_sums()[1]
 
     def jacobian(self, X, A):
         if self.batch is not None and self.comm.rank == 0:

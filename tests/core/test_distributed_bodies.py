@@ -1,0 +1,134 @@
+"""Bodies placed whole on ranks (`System(distribute=True)`, rodfem/core/placement.py).
+
+Under `mpirun -n R` each body is built on one rank (MPI.COMM_SELF), the bodies of a rank are
+assembled as a batch, the multipliers of a joint sit on the rank of its first body, and joints
+between bodies of different ranks couple the ranks (rodfem/fem/assembly.py's RankLayout).  The
+oracle is the serial run of the same system: every history column (energies, every joint's
+multipliers, the constraint residual, the balance) and the final state's norm equal it to 1e-9 on
+2 and 3 ranks (measured: 1e-14), on a chain of beams of unequal sizes (crossing joints between
+ranks), on rigid boxes with springs and dashpots (components between ranks) and on two free 3D rods
+(fewer bodies than ranks: each over all ranks); an error met on one rank only stops every rank (no rank left waiting)."""
+import pytest
+from processes import assert_same_rows, script_on_ranks
+
+COMMON = """
+import json, sys
+import numpy as np
+from mpi4py import MPI
+from rodfem import run
+from rodfem.core.system import System
+System.distribute = True
+
+def row(res, s, **extra):
+    out = dict(extra)
+    for c in res.rows[0]:
+        if c in ("wall_time", "newton_its") or not isinstance(res.rows[0][c], float):
+            continue
+        out[c] = float(res.column(c)[-1])
+        out[c + "@1"] = float(res.column(c)[1])
+    out["|x|"] = float(s.X1.norm())
+    out["placed"] = bool(s.distributed) if MPI.COMM_WORLD.size > 1 else True
+    if MPI.COMM_WORLD.rank == 0:
+        print(json.dumps(out))
+"""
+
+CHAIN = COMMON + """
+sys.path.insert(0, "tests/core")
+from test_batch import chain
+s = chain(7, sizes=[2, 3, 5, 1, 4, 2, 3], ramp=True)
+res = run(s, 1e-3, 4e-3)
+assert max(abs(e) for e in res.column("balance_error")) <= 1e-12 * max(abs(h) for h in res.column("H"))
+row(res, s)
+"""
+
+SCENE = COMMON + """
+from rodfem.app.scene import load
+sc = load(%r)
+p = sc.values(%r)
+s = sc.build(p, MPI.COMM_WORLD)
+res = run(s, p["dt"], %d * p["dt"])
+row(res, s)
+"""
+
+
+@pytest.mark.mpi
+def test_chain_on_ranks_equals_serial():
+    """Seven beams of 1 to 5 elements, pinned end to end, weights growing in time: the history on 2 and 3
+    ranks (bodies placed whole: 'placed') is the serial one."""
+    serial, *parallel = script_on_ranks(CHAIN, ranks=(1, 2, 3), timeout=300)
+    for p in parallel:
+        assert p["placed"]
+        assert_same_rows(serial, p)
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("scene, overrides, steps, placed", [
+    ("spring-damper-chain", {"n_bodies": 4}, 4, [True, True]),   # rigid boxes, springs and dashpots
+    ("free-flying-3d", {"n_elements": 4}, 3, [True, False]),     # two free 3D rods, a ball joint
+])
+def test_scenes_on_ranks_equal_serial(scene, overrides, steps, placed):
+    """Rigid bodies with components between ranks; two free 3D rods (director constraints, the total momenta
+    summed over the ranks), on 3 ranks fewer bodies than ranks (each rod then over all ranks): serial = 2
+    ranks = 3 ranks."""
+    serial, *parallel = script_on_ranks(SCENE % (scene, overrides, steps), ranks=(1, 2, 3), timeout=300)
+    assert [p.pop("placed") for p in parallel] == placed
+    serial.pop("placed")
+    for p in parallel:
+        assert_same_rows(serial, p)
+
+
+@pytest.mark.mpi
+def test_error_on_one_rank_stops_every_rank():
+    """The last body's initial values fail (on the rank that builds it only): every rank raises the
+    error, the run ends (inside the timeout) with it, and no rank is left waiting."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from processes import REPO, environment
+    script = COMMON + """
+sys.path.insert(0, "tests/core")
+from rodfem import Support
+from rodfem.forms import joints
+from rodfem.forms.planar_beam import PlanarBeam, quadratic, straight
+model = PlanarBeam(1.0, 1.0, quadratic(EA=1e4, GA=1e4, EI=1e2))
+s = System()
+prev = None
+for k in range(4):
+    shape = straight((k, 0.0), (k + 1, 0.0))
+    if k == 3:
+        def broken(x):
+            raise ValueError("initial values of b3: broken on purpose")
+        shape = (1.0, {"r": broken})
+    b = s.add(f"b{k}", model, shape=shape, n_elements=2, supports=[Support("left", "pinned")] if k == 0 else [])
+    if prev is not None:
+        s.join(joints.pin, prev.end, b.start)
+    prev = b
+s.build()
+"""
+    cmd = ["timeout", "60", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", "2",
+           sys.executable, "-c", script]
+    env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=120)
+    assert p.returncode not in (0, 124), p.stderr[-2000:]   # (124: timeout, a rank left waiting)
+    assert p.stderr.count("broken on purpose") >= 2, p.stderr[-2000:]   # raised on both ranks
+
+
+@pytest.mark.mpi
+def test_adaptive_steps_on_ranks_equal_serial():
+    """Adaptive steps (rodfem/analysis/stepping.py measures the error field by field, body by body: the
+    groups of the other ranks' bodies are empty on a rank): the same steps, rejections and history on 2
+    ranks as serially."""
+    script = COMMON + """
+sys.path.insert(0, "tests/core")
+from rodfem.analysis.stepping import StepControl
+from test_batch import chain
+s = chain(4, sizes=[2, 3, 2, 3])
+res = run(s, 1e-3, 6e-3, control=StepControl(adaptive=True, rtol=1e-4))
+row(res, s, steps=float(len(res.rows)), rejected=float(res.stepping["rejected"]))
+"""
+    serial, parallel = script_on_ranks(script, ranks=(1, 2), timeout=300)
+    assert parallel.pop("placed") and serial.pop("placed")
+    assert serial["steps"] > 7 and serial["rejected"] >= 1   # (adapted: more steps than 6, some rejected)
+    assert_same_rows(serial, parallel)
