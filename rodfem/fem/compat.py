@@ -163,8 +163,10 @@ def form_twin(compiled, ufl_form, swap, mesh):
         return swap.get(id(o), o)
     ufcx = compiled.ufcx_form
     original = ufl_form.coefficients()
-    coefficients = [to(original[ufcx.original_coefficient_position[i]])._cpp_object
-                    for i in range(ufcx.num_coefficients)]
+    positions = getattr(ufcx, "original_coefficient_position", None)
+    if positions is None:   # pragma: no cover - DOLFINx >= 0.8
+        return _form_twin_nanobind(compiled, ufl_form, to, mesh)
+    coefficients = [to(original[positions[i]])._cpp_object for i in range(ufcx.num_coefficients)]
     constants = [to(c)._cpp_object for c in ufl_form.constants()]
     spaces = [to(a.ufl_function_space())._cpp_object for a in ufl_form.arguments()]
     data, = list(ufl_form.subdomain_data().values())
@@ -173,6 +175,33 @@ def form_twin(compiled, ufl_form, swap, mesh):
     subdomains = {t: to(data.get(name)) for name, t in kinds.items()}
     return type(compiled)(ufcx, spaces, coefficients, constants, subdomains, mesh.ufl_domain().ufl_cargo(), _ffi(),
                           compiled.code)
+
+
+def _form_twin_nanobind(compiled, ufl_form, to, mesh):   # pragma: no cover - DOLFINx >= 0.8
+    """form_twin for DOLFINx 0.8-0.9, after dolfinx.fem.forms.form's `_form`: the C++ form takes
+    the integration entities of each subdomain id (not the tags) and the entity maps."""
+    import itertools
+
+    from dolfinx.fem import forms as dforms
+    ufcx = compiled.ufcx_form
+    original = ufl_form.coefficients()
+    coefficients = [to(original[ufcx.original_coefficient_positions[i]])._cpp_object
+                    for i in range(ufcx.num_coefficients)]
+    constants = [to(c)._cpp_object for c in ufl_form.constants()]
+    spaces = [to(a.ufl_function_space())._cpp_object for a in ufl_form.arguments()]
+    data, = list(ufl_form.subdomain_data().values())
+    ids = {kind: [] for kind in data}
+    for integral in ufl_form.integrals():
+        if integral.subdomain_data() is not None and integral.subdomain_id() != "everywhere":
+            sid = integral.subdomain_id()
+            ids[integral.integral_type()].append([i for i in sid if i != "everywhere"]
+                                                 if isinstance(sid, tuple) else [sid])
+    subdomains = {dforms._ufl_to_dolfinx_domain[kind]: dforms.get_integration_domains(
+        dforms._ufl_to_dolfinx_domain[kind], to(tags[0]), sorted(itertools.chain.from_iterable(ids[kind])))
+        for kind, tags in data.items()}
+    cpp_form = type(compiled._cpp_object)(_ffi().cast("uintptr_t", _ffi().addressof(ufcx)), spaces, coefficients,
+                                          constants, subdomains, {}, mesh.ufl_domain().ufl_cargo())
+    return type(compiled)(cpp_form, ufcx, compiled.code, compiled.module)
 
 
 def _ffi():
