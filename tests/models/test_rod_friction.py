@@ -53,7 +53,8 @@ def block_on_rods(v0=0.0, pull=0.0, friction=FRICTION, La=0.1):
     m = model.rhoA * La
     W = m * G
     k = stiffness_for(W, 1e-4)
-    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 2e-12, "snes_max_it": 40})   # (the stiff bars: round-off ~1.5e-12)
+    # (the stiff bars: the residual's round-off ~1.5e-12)
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 2e-12, "snes_max_it": 40})
     z = 2 * R_TUBE - 0.5e-4   # at rest: four segment pairs (two at each crossbar) carry W
     a = s.add("a", model, La, 2, initial=straight((0, 0, z), (1, 0, 0), (0, 0, 1), (v0, 0, 0), La),
               loads=[Load("v", [pull * FRICTION.mu_s * W / La, 0.0, -model.rhoA * G], "domain", "weight")])
@@ -111,7 +112,8 @@ def motion(name):
             x = body.space.split(body.x1)
             rhoA = body.model.rhoA
             forms.update({k: fem.form(f) for k, f in body.momentum_forms(x).items()})
-            forms.update({"m": fem.form(rhoA * body.dx), **{f"c_{c}": fem.form(rhoA * x["r"][i] * body.dx) for i, c in enumerate("xyz")}})
+            forms["m"] = fem.form(rhoA * body.dx)
+            forms.update({f"c_{c}": fem.form(rhoA * x["r"][i] * body.dx) for i, c in enumerate("xyz")})
         val = {k: fem.assemble_scalar(f) for k, f in forms.items()}
         c, p = (np.array([val[f"{q}_{a}"] / (val["m"] if q == "c" else 1.0) for a in "xyz"]) for q in "cp")
         Lc = np.array([val[f"L_{a}"] for a in "xyz"]) - np.cross(c, p)
