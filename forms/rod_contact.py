@@ -77,7 +77,8 @@ u x f on the section.  So
   rows tested with the rotation theta x x_m, theta x d_k,m), which for a pair is
   (x_c + u_a) x f - (y_c + u_b) x f = (c - c) x f = 0: exact (that is why beta solves the frame,
   which is not orthonormal at the midpoint and between nodes, instead of taking D^T u).  Against a
-  string only the rod's couple acts: the pair's moment is then rho_b n x f (name.Mf);
+  string only the rod's couple acts: the pair's moment is then rho_s n x f (name.Mf; rho_s the
+  string's share of d, f the force on body a);
 * energy: the work of the step, tested with the midpoint velocities, is h f . v_t <= 0, booked in
   `dissipated` (H_{n+1} - H_n + dissipated = supplied stays exact);
 * a rod sliding across another picks up spin until the points roll on each other (v_t -> 0).

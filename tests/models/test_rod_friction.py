@@ -22,6 +22,8 @@ from rodfem.errors import InputError
 from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import Coulomb, stiffness_for
 from rodfem.forms.rod_contact import RodContact
+from rodfem.forms.string import String
+from rodfem.forms.string_materials import logarithmic
 
 G, R_TUBE, RHO = 9.81, 0.01, 1750.0
 FRICTION = Coulomb(mu_s=0.4, mu_k=0.2, eps=2e-4, v_s=1e-3)
@@ -256,6 +258,35 @@ def test_self_contact_with_friction_keeps_momentum_and_the_balance():
     lost = np.diff(column(result, "dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
     assert result.max_balance_error <= 1e-12 * KE
+
+
+def test_a_string_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_the_string_arm():
+    """A string (no section: friction at its centreline) crossing a free rod while sliding along it: only the
+    rod takes a couple, so the pair's loads have the moment rho_s n x f (rho_s = r_s d / R, the string's share
+    of the centrelines' distance): the total angular momentum changes by exactly h rub.Mf each step (Mf not 0),
+    the linear momentum is constant to round-off, the friction's work is never positive and the balance is
+    exact."""
+    rhoA, V, r = 0.3, 0.5, 0.01
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
+    a = s.add("a", String(logarithmic(EA=50.0), rhoA), 0.5, 10,
+              initial={"r": lambda x: np.vstack([x[0] - 0.25, 0 * x[0] + 0.013, 0 * x[0] + 0.011]),
+                       "v": lambda x: np.vstack([0 * x[0] + 0.2, 0 * x[0], 0 * x[0] - V / 2])})
+    b = s.add("b", rod_model(1e7), 0.5, 6, initial=straight((0.017, 0, -0.011), (0, 1, 0), (0, 0, 1), (0, 0, V / 2), 0.5))
+    k = 1.5 * (0.25 * rhoA * 0.5) * V**2 / 1e-3**3
+    s.contact(RodContact(k, r, friction=Coulomb(0.3)), a, b, name="rub")
+    h = 2e-4
+    result = run(s, h, 0.01)
+    assert column(result, "rub.N").max() > 0
+    scale = rhoA * 0.5 * V
+    for key in ("p_x", "p_y", "p_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * scale, key
+    Mf = np.column_stack([column(result, f"rub.Mf_{c}") for c in "xyz"])
+    L = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
+    assert np.abs(Mf).max() > 1e-3 * r * 0.3 * column(result, "rub.N").max()
+    assert np.abs(np.diff(L, axis=0) - h * Mf[1:]).max() <= 1e-13 * scale * 0.5
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.max() > 0
+    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
 
 
 def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
