@@ -667,7 +667,7 @@ MUTATIONS = [
     M("rodfriction-no-velocity-jacobian", "rodfem/core/bodycontact.py",
       [("                         (rows, self._index(p, pairs, (\"v\", \"w\") if framed else (\"v\",)), -dv)]",
         "                         (rows, self._index(p, pairs, (\"v\", \"w\") if framed else (\"v\",)), 0 * dv)]")],
-      [f"{ROD_FRICTION}::test_a_rod_sliding_lengthwise_across_two_rods_stops_like_a_block"],
+      [f"{ROD_FRICTION}::test_two_free_rods_rubbing_keep_momentum_and_the_balance[discrete-gradient]"],
       "Newton's matrix without the friction's derivative in v_{n+1}: Newton stalls on the stiff damper"),
     M("rodcontact-pattern-misses-friction", "rodfem/core/bodycontact.py",
       [("                for kinds in ((\"q\", \"d\"), (\"v\", \"w\")) if rubs else ((\"q\",),):",

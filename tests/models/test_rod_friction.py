@@ -238,6 +238,7 @@ def test_two_free_rods_rubbing_keep_momentum_and_the_balance(rule):
     impulse = -np.cumsum(p["dt"] * arm * column(result, "touch.Ft_x"))
     assert column(result, "b.Lc_y") == pytest.approx(impulse, rel=1e-3, abs=1e-3 * impulse[-1])
     assert impulse[-1] > 0.5 * p["mu"] * column(result, "touch.N").max() * p["dt"] * R_TUBE
+    assert column(result, "newton_its").max() <= 4   # (the friction's derivatives in Newton's matrix: 2 to 3)
     lost = np.diff(column(result, "dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
     if rule == "discrete-gradient":
