@@ -123,8 +123,14 @@ class InterfaceSchur:
     def setUp(self, pc):
         A, _ = pc.getOperators()
         self.comm = A.getComm().tompi4py()
+        nz = self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
+        if self.fallback is not None and nz != self.pattern:
+            # a new pattern (contact entries added): MUMPS afresh (MUMPS 5.7 crashes in its
+            # redistribution when a factorization is redone on a matrix whose pattern grew)
+            self.fallback.destroy()
+            self._fall_back(pc)
+            self.pattern = nz
         if self.fallback is None:
-            nz = self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
             if nz != self.pattern:
                 self._split(A)
                 self.pattern = nz
