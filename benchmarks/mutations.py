@@ -606,6 +606,11 @@ MUTATIONS = [
       [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
+    M("rodcontact-guard-end-gap-only", "rodfem/core/bodycontact.py",
+      [("                margin = 0.5 * (p.distance(X0) + p.distance(X1) - s) / max(p.R, 1e-300)",
+        "                margin = 0.5 * (p.distance(X0) + p.distance(X1)) / max(p.R, 1e-300)")],
+      [f"{ROD_CONTACT}::test_a_step_that_would_pass_the_rods_through_each_other_is_split"],
+      "the step's guard on the gaps at x_n and x_n+1 only (not the relative motion): a step tunnelling through passes"),
 
     # -- the plectoneme: link, twist, writhe and the turned end (issue 24) --------------------------
     M("writhe-unsigned", "rodfem/analysis/linking.py",
