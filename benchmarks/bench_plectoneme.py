@@ -50,7 +50,7 @@ def one(label, overrides):
     row.update(wall=wall, steps=steps, substeps=res.stepping.get("substeps", steps), per_step=wall / steps,
                lk=lk, balance=float(np.abs(col["balance_error"]).max()),
                pen=float(col["self.penetration"].max()) / p["r"], Tw=float(col["Tw"][-1]), Wr=float(col["Wr"][-1]),
-               wall_pen=max((r.get("wall.penetration", 0.0) for r in res.rows), default=0.0) / p["r"],
+               wall_pen=max((r.get("rod.wall.penetration", 0.0) for r in res.rows), default=0.0) / p["r"],
                rejected=res.stepping.get("rejected", 0),
                survives="yes" if lk < 1e-6 else "no", note="" if lk < 1e-6 else "Lk jumped: the rod crossed itself")
     return row

@@ -613,6 +613,10 @@ MUTATIONS = [
       "the step's guard on the gaps at x_n and x_n+1 only (not the relative motion): a step tunnelling through passes"),
 
     # -- the plectoneme: link, twist, writhe and the turned end (issue 24) --------------------------
+    M("plectoneme-wall-through-clamp", "demos/plectoneme.py",
+      [('Contact(Plane((1.0, 0.0, 0.0), (-p["r"], 0.0, 0.0))', 'Contact(Plane((1.0, 0.0, 0.0), (0.0, 0.0, 0.0))')],
+      [f"{PLECTONEME}::test_below_buckling_the_rod_twists_straight"],
+      "the clamp's wall through the clamped node (not the tube's surface): it pushes the rod's end away"),
     M("writhe-unsigned", "rodfem/analysis/linking.py",
       [("    sign = np.where(np.abs(volume) > 1e-12 * size, np.sign(volume), 0.0)", "    sign = np.where(np.abs(volume) > 1e-12 * size, 1.0, 0.0)")],
       [f"{LINKING}::test_planar_curves_have_no_writhe", f"{LINKING}::test_helix_writhe_twist_and_link"],

@@ -155,7 +155,7 @@ def build(p, comm):
     system = System(integrator=p["integrator"], comm=comm,
                     newton_options={"snes_atol": p["newton_atol"], "snes_rtol": 1e-14, "snes_stol": 1e-13, "snes_max_it": 40})
     # ## The wall the rod is clamped in: the plane x = -r, which the tube of radius r touches at the clamp
-    # (gap g = x of the centreline: columns wall.energy, wall.N, wall.penetration, ...)
+    # (gap g = x of the centreline: columns rod.wall.energy, rod.wall.N, rod.wall.penetration, ...)
     wall = [Contact(Plane((1.0, 0.0, 0.0), (-p["r"], 0.0, 0.0)), p["k_wall"], radius=p["r"], name="wall")] \
         if p["wall"] == "on" else []
     rod = system.add("rod", model, p["L"], p["n_elements"], initial=initial(p), supports=[Support("left", "clamped")],
