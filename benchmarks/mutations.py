@@ -606,8 +606,17 @@ MUTATIONS = [
       [f"{ROD_CONTACT}::test_the_step_force_does_the_energy_change_with_no_net_force_or_moment[discrete-gradient]",
        f"{ROD_CONTACT}::test_rod_resting_across_clamped_rods_carries_its_weight[lever]"],
       "the contact force on one body only (no reaction on the other)"),
+    M("rodcontact-guard-end-gap-only", "rodfem/core/bodycontact.py",
+      [("                margin = 0.5 * (p.distance(X0) + p.distance(X1) - s) / max(p.R, 1e-300)",
+        "                margin = 0.5 * (p.distance(X0) + p.distance(X1)) / max(p.R, 1e-300)")],
+      [f"{ROD_CONTACT}::test_a_step_that_would_pass_the_rods_through_each_other_is_split"],
+      "the step's guard on the gaps at x_n and x_n+1 only (not the relative motion): a step tunnelling through passes"),
 
     # -- the plectoneme: link, twist, writhe and the turned end (issue 24) --------------------------
+    M("plectoneme-wall-through-clamp", "demos/plectoneme.py",
+      [('Contact(Plane((1.0, 0.0, 0.0), (-p["r"], 0.0, 0.0))', 'Contact(Plane((1.0, 0.0, 0.0), (0.0, 0.0, 0.0))')],
+      [f"{PLECTONEME}::test_below_buckling_the_rod_twists_straight"],
+      "the clamp's wall through the clamped node (not the tube's surface): it pushes the rod's end away"),
     M("writhe-unsigned", "rodfem/analysis/linking.py",
       [("    sign = np.where(np.abs(volume) > 1e-12 * size, np.sign(volume), 0.0)", "    sign = np.where(np.abs(volume) > 1e-12 * size, 1.0, 0.0)")],
       [f"{LINKING}::test_planar_curves_have_no_writhe", f"{LINKING}::test_helix_writhe_twist_and_link"],
