@@ -60,10 +60,15 @@ class Segments:
         self.off = np.asarray(los, dtype=np.int64)
         self.len = np.asarray(lengths, dtype=np.int64)
 
+        ffi = self.mod.ffi   # (the fixed arguments' views made once: a small step calls this ~10 times)
+        self._fixed = (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
+                       ffi.from_buffer("int64_t[]", self.len))
+        self._last = (None, None)   # (the last X and its view: X is most often the same array)
+
     def _args(self, X, kind):
-        ffi = self.mod.ffi
-        return (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
-                ffi.from_buffer("int64_t[]", self.len), ffi.from_buffer(kind, X))
+        if self._last[0] is not X:
+            self._last = (X, self.mod.ffi.from_buffer(kind, X))
+        return self._fixed + (self._last[1],)
 
     def put(self, X):
         """Every Function <- its segment of X."""

@@ -107,6 +107,7 @@ class InterfaceSchur:
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
         self.nG = 0
+        self._no_interface = np.zeros(0)
         self.ready = False        # set up for the current operator
         self.failed = False       # serial: no order without a zero pivot (Newton takes the next LU)
         self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S", "solve"), 0.0)
@@ -150,6 +151,16 @@ class InterfaceSchur:
             # a context made afresh by the options (Newton's settings applied again after a failed
             # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
             self.setUp(pc)
+        if self.plu is not None and self.nG == 0 and self.comm.size == 1 and self.fallback is None:
+            # one rank's partial LU: two sweeps in C, no interface (nothing to warn or reduce);
+            # a Newton step of the 3D rod applies it 8 times
+            t0, out = time.perf_counter(), x.getArray()
+            self.plu.forward(b.getArray(readonly=True))
+            self.plu.backward(self._no_interface, out)
+            self.times["solve"] += time.perf_counter() - t0
+            if not np.isfinite(out).all():
+                petsc_raw.pc_set_failed(pc)
+            return
         try:
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", LinAlgWarning)
@@ -301,6 +312,9 @@ class InterfaceSchur:
         block's values, then the off-diagonal block's, then the gathered A_GC rows), the interior."""
         interior = np.flatnonzero(~in_G)
         nI, nG = len(interior), self.nG
+        if nG == 0 and off is None:   # (one rank, no interface: K is the diagonal block, in its CSR order)
+            return dict(ki=np.asarray(di, np.int64), kj=np.asarray(dj, np.int64), nI=nI,
+                        src=np.arange(len(dj), dtype=np.int64), nD=len(dj), nO=0, interior=interior)
         imap = np.full(n, -1, np.int64)
         imap[interior] = np.arange(nI)
         imap[self.G_own] = nI + self.G_own_pos       # owned interface columns -> their place in G
