@@ -262,14 +262,17 @@ class FormBatch:
     def scalars(self, X):
         """Each body's value of the functional at X."""
         self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
+        lib, p = self.mod.lib, self._p
         total = np.zeros(self.nb)
         for it in self.integrals:   # (DOLFINx: each integral's sum, then their sum)
-            out = np.zeros(self.nb)
+            if "sums" not in it:   # (each integral's sums and their view, made once)
+                it["sums"] = np.zeros(self.nb)
+                it["p_sums"] = self.mod.ffi.from_buffer("double[]", it["sums"])
+            it["sums"][:] = 0.0
             lib.rodfem_batch_scalar(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nx, p["xdofs"],
                                     p["x"], it["p_coeffs"], it["cstride"], p["consts"], it["p_body"], self.kstride,
-                                    ffi.from_buffer("double[]", out))
-            total += out
+                                    it["p_sums"])
+            total += it["sums"]
         return total
 
     def add_matrix(self, X, bc, nown, da, di, dj, ghost, room):
@@ -357,6 +360,10 @@ class BlockBatch:
     def _structure(self, shared):
         self.diag = shared[0]
         self.bc_diag = np.concatenate([blk.fast.bc_diag for blk in self.blocks])
+        ffi = self.J.mod.ffi   # (the views add_jacobian passes, made again with the structure)
+        self._views = (ffi.from_buffer("int8_t[]", self.bc), ffi.from_buffer("int32_t[]", self.diag.i),
+                       ffi.from_buffer("int32_t[]", self.diag.j), ffi.from_buffer("int32_t[]", np.zeros(1, np.int32)),
+                       ffi.from_buffer("int64_t[]", self.bc_diag))
 
     def set_state(self, X):
         """(The iterate is read from X at assembly.)"""
@@ -392,12 +399,11 @@ class BlockBatch:
         self.J.refresh()
         ffi = self.J.mod.ffi
         da = ffi.cast("double*", self.diag.open())
+        bc, di, dj, no_ghost, bc_diag = self._views
         try:
-            ng = self.J.add_matrix(X, ffi.from_buffer("int8_t[]", self.bc), self.size, da,
-                                   ffi.from_buffer("int32_t[]", self.diag.i), ffi.from_buffer("int32_t[]", self.diag.j),
-                                   ffi.from_buffer("int32_t[]", np.zeros(1, np.int32)), self.room)
+            ng = self.J.add_matrix(X, bc, self.size, da, di, dj, no_ghost, self.room)
             if ng >= 0 and len(self.bc_diag):
-                self.J.mod.lib.rodfem_set(da, len(self.bc_diag), ffi.from_buffer("int64_t[]", self.bc_diag), 1.0)
+                self.J.mod.lib.rodfem_set(da, len(self.bc_diag), bc_diag, 1.0)
         finally:
             self.diag.close()
         if ng < 0:
@@ -456,6 +462,10 @@ class Functionals:
 
     def values(self, X):
         """Each body's value at X (X: the system's x_{n+1}; the bodies' other coefficients as they are)."""
+        if not self.single and len(self.batches) == 1 and self.batches[0][1] == self.order:   # (one batch: its order)
+            batch = self.batches[0][0]
+            batch.refresh()
+            return batch.scalars(X).tolist()
         out = {}
         for batch, members in self.batches:
             batch.refresh()
