@@ -148,7 +148,7 @@ class Newton:
 
     def _skip_doomed_lu(self, A):
         """The first Jacobian, serial, PETSc's LU selected: with a zero on the diagonal (multipliers)
-        go straight to the partial LU (LU_CHAIN's next stage, which orders those rows after the dofs
+        go straight to LU_CHAIN's next stage (the partial LU, which orders those rows after the dofs
         they constrain) before the PC is set up.  PETSc's LU, which does not pivot, met its zero pivot
         there on every such Jacobian measured (the 3D rod, joints), and a failed factorization cost
         the first step a wasted factorization and a repeated Newton solve (issue 26: 1.5 of the
@@ -159,8 +159,9 @@ class Newton:
             zero = not diagonal.getArray(readonly=True).all()
         finally:
             diagonal.destroy()
-        if zero:
-            self.use_lu("schur")
+        following = next_lu(A, "petsc") if zero else None
+        if following is not None:
+            self.use_lu(following)
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
