@@ -1099,10 +1099,6 @@ MUTATIONS = [
       [BATCH + "::test_chain_batched_equals_body_by_body"],
       "the batch's Jacobian has no 1 on the diagonal of its supported rows"),
     # -- small steps (issue 26): views made once, the doomed LU skipped ----------------------------
-    M("segments-stale-view", "rodfem/fem/batch.py",
-      [("        if self._last[0] is not X:", "        if self._last[0] is None:")],
-      [BATCH + "::test_segments_copy_whichever_array_they_are_given"],
-      "Segments keep reading and writing the first array they were given, not the one passed now"),
     M("batch-scalar-sums-kept", "rodfem/fem/batch.py",
       [('            it["sums"][:] = 0.0\n', "")],
       [BATCH + "::test_chain_batched_equals_body_by_body"],

@@ -63,12 +63,11 @@ class Segments:
         ffi = self.mod.ffi   # (the fixed arguments' views made once: a small step calls this ~10 times)
         self._fixed = (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
                        ffi.from_buffer("int64_t[]", self.len))
-        self._last = (None, None)   # (the last X and its view: X is most often the same array)
 
     def _args(self, X, kind):
-        if self._last[0] is not X:
-            self._last = (X, self.mod.ffi.from_buffer(kind, X))
-        return self._fixed + (self._last[1],)
+        # (X's view made at each call and dropped: a view kept would keep X, and an array of a PETSc
+        # Vec kept is a Vec whose changes PETSc does not see, e.g. its cached norm)
+        return self._fixed + (self.mod.ffi.from_buffer(kind, X),)
 
     def put(self, X):
         """Every Function <- its segment of X."""
@@ -247,13 +246,16 @@ class FormBatch:
         self.S[:self.size] = X
         for it in self.integrals:
             if it["cstride"]:
-                np.take(self.S, it["index"].ravel(), out=it["coeffs"][:it["index"].size])
+                if "flat" not in it:   # (the gather's index and target as flat arrays, made once)
+                    it["flat"] = np.ascontiguousarray(it["index"]).ravel()
+                    it["target"] = it["coeffs"][:it["flat"].size]
+                self.S.take(it["flat"], out=it["target"])
 
     def vector(self, X, b):
         """b[rows of X] += the residual of every body (b: an array like X)."""
         self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
-        out = ffi.from_buffer("double[]", b)
+        lib, p = self.mod.lib, self._p
+        out = self.mod.ffi.from_buffer("double[]", b)
         for it in self.integrals:
             lib.rodfem_batch_vector(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nd, p["dofs"],
                                     self.nx, p["xdofs"], p["x"], it["p_coeffs"], it["cstride"], p["consts"],
