@@ -159,7 +159,9 @@ class FormBatch:
                 cells=np.ascontiguousarray(np.concatenate(cells), dtype=np.int32),
                 facets=np.ascontiguousarray(np.concatenate(fac), dtype=np.int32) if facets is not None else None,
                 body=np.ascontiguousarray(np.concatenate(body)), index=index, cstride=index.shape[1],
+                flat=np.ascontiguousarray(index, dtype=np.int64).ravel(),   # (the gather's index, flat)
                 coeffs=np.zeros(max(index.size, 1)), key=(itype, i)))
+            self.integrals[-1]["target"] = self.integrals[-1]["coeffs"][:index.size]
         self._pointers(ffi)
         self.refresh()
         self._check(iterates, offsets)
@@ -246,9 +248,6 @@ class FormBatch:
         self.S[:self.size] = X
         for it in self.integrals:
             if it["cstride"]:
-                if "flat" not in it:   # (the gather's index and target as flat arrays, made once)
-                    it["flat"] = np.ascontiguousarray(it["index"]).ravel()
-                    it["target"] = it["coeffs"][:it["flat"].size]
                 self.S.take(it["flat"], out=it["target"])
 
     def vector(self, X, b):
@@ -262,20 +261,45 @@ class FormBatch:
                                     it["p_body"], self.kstride, out)
 
     def scalars(self, X):
-        """Each body's value of the functional at X."""
-        self._coefficients(X)
-        lib, p = self.mod.lib, self._p
-        total = np.zeros(self.nb)
-        for it in self.integrals:   # (DOLFINx: each integral's sum, then their sum)
-            if "sums" not in it:   # (each integral's sums and their view, made once)
-                it["sums"] = np.zeros(self.nb)
-                it["p_sums"] = self.mod.ffi.from_buffer("double[]", it["sums"])
-            it["sums"][:] = 0.0
-            lib.rodfem_batch_scalar(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nx, p["xdofs"],
-                                    p["x"], it["p_coeffs"], it["cstride"], p["consts"], it["p_body"], self.kstride,
-                                    it["p_sums"])
-            total += it["sums"]
-        return total
+        """Each body's value of the functional at X, its constants and other coefficients read now
+        (`refresh`, the gather and each integral's kernel loop in one C call, rodfem_scalar_job:
+        the step's H, work and columns are a dozen functionals of a few cells each)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        self.mod.lib.rodfem_scalar_job(*self._job, self.mod.ffi.from_buffer("double[]", X), *self._job_integrals)
+        return self.total.copy()
+
+    def _make_job(self):
+        """The arguments of rodfem_scalar_job, made once: the segments of `refresh`, each integral's
+        arrays (by address; this object keeps them) and the sums."""
+        if not hasattr(self, "_other_views"):
+            self._sources()
+        ffi, p = self.mod.ffi, self._p
+        none = (0, ffi.NULL, ffi.NULL, ffi.NULL)
+        consts = self._const_views._fixed if self._const_views is not None else none
+        others = self._other_views._fixed if self._other_views is not None else none
+        self.total = np.zeros(self.nb)
+        for it in self.integrals:
+            it["sums"] = np.zeros(self.nb)
+        address = (lambda a: a.ctypes.data if a is not None else 0)
+        self._job_arrays = [
+            np.array([it["n"] for it in self.integrals], np.int64),
+            np.array([address(it["cells"]) for it in self.integrals], np.uintp),
+            np.array([address(it["facets"]) for it in self.integrals], np.uintp),
+            np.array([it["address"] for it in self.integrals], np.uintp),
+            np.array([address(it["coeffs"]) for it in self.integrals], np.uintp),
+            np.array([it["cstride"] for it in self.integrals], np.int64),
+            np.array([address(it["flat"]) for it in self.integrals], np.uintp),
+            np.array([address(it["body"]) for it in self.integrals], np.uintp),
+            np.array([address(it["sums"]) for it in self.integrals], np.uintp)]
+        kinds = ("int64_t[]", "uintptr_t[]", "uintptr_t[]", "uintptr_t[]", "uintptr_t[]", "int64_t[]", "uintptr_t[]",
+                 "uintptr_t[]", "uintptr_t[]")
+        self._job = (*consts, p["consts"], *others, ffi.from_buffer("double[]", self.S), self.size)
+        self._job_integrals = (len(self.integrals), *(ffi.from_buffer(k, a) for k, a in zip(kinds, self._job_arrays)),
+                               self.nx, p["xdofs"], p["x"], self.kstride, self.nb,
+                               ffi.from_buffer("double[]", self.total))
 
     def add_matrix(self, X, bc, nown, da, di, dj, ghost, room):
         """Add the bilinear form at X into the CSR values da (structure di, dj; rows and columns with
@@ -465,12 +489,9 @@ class Functionals:
     def values(self, X):
         """Each body's value at X (X: the system's x_{n+1}; the bodies' other coefficients as they are)."""
         if not self.single and len(self.batches) == 1 and self.batches[0][1] == self.order:   # (one batch: its order)
-            batch = self.batches[0][0]
-            batch.refresh()
-            return batch.scalars(X).tolist()
+            return self.batches[0][0].scalars(X).tolist()
         out = {}
         for batch, members in self.batches:
-            batch.refresh()
             out.update(zip(members, batch.scalars(X).tolist()))
         for b in self.single:
             out[b] = self._assemble(self.forms[b])

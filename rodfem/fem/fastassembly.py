@@ -230,6 +230,36 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
            facets ? facets + e : NULL, &perm);   /* the kernel adds to its body's sum, as in DOLFINx */
   }
 }
+
+/* A functional of a batch (rodfem/fem/batch.py) in one call: the constants' and the other
+   coefficients' values copied in (segments k: to[off[k]:off[k] + len[k]] <- the array at ptr[k]),
+   X into S[0:size], then integral by integral its coefficients gathered, coeffs[k] = S[index[k]],
+   its kernel run into sums (one per body) and total += sums, as rodfem_batch_scalar and numpy did
+   it one call each. */
+void rodfem_scalar_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body, const uintptr_t* sums,
+                       int nx, const int32_t* xdofs, const double* x, int kstride, int nb, double* total)
+{
+  for (int k = 0; k < nc; ++k) memcpy(consts + coff[k], (const double*)cptr[k], sizeof(double) * clen[k]);
+  for (int k = 0; k < no; ++k) memcpy(S + ooff[k], (const double*)optr[k], sizeof(double) * olen[k]);
+  memcpy(S, X, sizeof(double) * size);
+  for (int b = 0; b < nb; ++b) total[b] = 0.0;
+  for (int i = 0; i < ni; ++i) {
+    double* c = (double*)coeffs[i];
+    const int64_t* idx = (const int64_t*)index[i];
+    const int64_t m = n[i] * cstride[i];
+    for (int64_t k = 0; k < m; ++k) c[k] = S[idx[k]];
+    double* s = (double*)sums[i];
+    for (int b = 0; b < nb; ++b) s[b] = 0.0;
+    rodfem_batch_scalar((int)n[i], (const int32_t*)cells[i], (const int32_t*)facets[i], address[i], nx, xdofs, x,
+                        c, (int)cstride[i], consts, (const int32_t*)body[i], kstride, s);
+    for (int b = 0; b < nb; ++b) total[b] += s[b];
+  }
+}
 """
 
 C_DECL = """
@@ -253,6 +283,13 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
                          int nx, const int32_t* xdofs, const double* x,
                          const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
                          int kstride, double* out);
+void rodfem_scalar_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body, const uintptr_t* sums,
+                       int nx, const int32_t* xdofs, const double* x, int kstride, int nb, double* total);
 """
 
 def form_integrals(form):
