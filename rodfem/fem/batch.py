@@ -193,11 +193,6 @@ class FormBatch:
         buf = ffi.from_buffer
         self._p = dict(x=buf("double[]", self.x), xdofs=buf("int32_t[]", self.xdofs),
                        dofs=buf("int32_t[]", self.dofs))
-        for it in self.integrals:
-            it["p_cells"] = buf("int32_t[]", it["cells"])
-            it["p_facets"] = buf("int32_t[]", it["facets"]) if it["facets"] is not None else ffi.NULL
-            it["p_body"] = buf("int32_t[]", it["body"])
-            it["p_coeffs"] = buf("double[]", it["coeffs"])
 
     def _check(self, iterates, offsets):
         """The gathered coefficients equal DOLFINx's packing, body by body (else ValueError)."""
@@ -251,14 +246,16 @@ class FormBatch:
                 self.S.take(it["flat"], out=it["target"])
 
     def vector(self, X, b):
-        """b[rows of X] += the residual of every body (b: an array like X)."""
-        self._coefficients(X)
-        lib, p = self.mod.lib, self._p
-        out = self.mod.ffi.from_buffer("double[]", b)
-        for it in self.integrals:
-            lib.rodfem_batch_vector(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nd, p["dofs"],
-                                    self.nx, p["xdofs"], p["x"], it["p_coeffs"], it["cstride"], p["consts"],
-                                    it["p_body"], self.kstride, out)
+        """b[rows of X] += the residual of every body (b: an array like X), its constants and other
+        coefficients read now (`refresh`, the gather and the kernel loops in one C call, rodfem_vector_job)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        ffi = self.mod.ffi
+        self.mod.lib.rodfem_vector_job(*self._job, ffi.from_buffer("double[]", X), *self._job_integrals[:9],
+                                       self.nd, self._p["dofs"], self.nx, self._p["xdofs"], self._p["x"],
+                                       self.kstride, ffi.from_buffer("double[]", b))
 
     def scalars(self, X):
         """Each body's value of the functional at X, its constants and other coefficients read now
@@ -304,22 +301,18 @@ class FormBatch:
     def add_matrix(self, X, bc, nown, da, di, dj, ghost, room):
         """Add the bilinear form at X into the CSR values da (structure di, dj; rows and columns with
         bc[row] set left out); entries without a place go to room = (rows, cols, values) for
-        MatSetValues.  Returns their number, or -1 if room was too small."""
-        self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
+        MatSetValues.  Returns their number, or -1 if room was too small.  The constants and other
+        coefficients read now (`refresh`, the gather and rodfem_assemble in one C call, rodfem_matrix_job)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        ffi, p = self.mod.ffi, self._p
         grow, gcol, gval = room
-        total = 0
-        for it in self.integrals:
-            ng = lib.rodfem_assemble(
-                it["n"], it["p_cells"], it["p_facets"], it["address"], self.nd, p["dofs"], self.nx, p["xdofs"],
-                p["x"], it["p_coeffs"], it["cstride"], p["consts"], bc, nown, di, dj, da,
-                ffi.NULL, ffi.NULL, ffi.NULL, ghost,
-                ffi.from_buffer("int32_t[]", grow[total:]), ffi.from_buffer("int32_t[]", gcol[total:]),
-                ffi.from_buffer("double[]", gval[total:]), len(grow) - total, 0, it["p_body"], self.kstride)
-            if ng < 0:
-                return -1
-            total += ng
-        return total
+        return self.mod.lib.rodfem_matrix_job(
+            *self._job, ffi.from_buffer("double[]", X), *self._job_integrals[:9], self.nd, p["dofs"], self.nx,
+            p["xdofs"], p["x"], self.kstride, bc, nown, di, dj, da, ghost, ffi.from_buffer("int32_t[]", grow),
+            ffi.from_buffer("int32_t[]", gcol), ffi.from_buffer("double[]", gval), len(grow))
 
 
 class BlockBatch:
@@ -355,9 +348,8 @@ class BlockBatch:
         self._room(1024)
 
     def refresh(self):
-        """Constants, x_n and the other coefficients, the Dirichlet values (one copy each: at every
-        assembly, as DOLFINx reads them)."""
-        self.F.refresh()
+        """The Dirichlet values (at every assembly, as DOLFINx reads them; the residual's constants, x_n
+        and other coefficients: read by its kernel loop's call, FormBatch.vector)."""
         if self._g:
             self.g = np.concatenate([g[dofs] for g, dofs in self._g])
 
@@ -422,7 +414,6 @@ class BlockBatch:
     def add_jacobian(self, A, X):
         """Add the bodies' Jacobians into A (zeroed before); False when the room for entries outside
         the pattern was too small (it is doubled: zero A and try again)."""
-        self.J.refresh()
         ffi = self.J.mod.ffi
         da = ffi.cast("double*", self.diag.open())
         bc, di, dj, no_ghost, bc_diag = self._views
