@@ -128,10 +128,11 @@ def main():
     ap.add_argument("--small", action="store_true", help="only the small scenes, this checkout and --before in turn, "
                     "--repeats processes each: medians (the small-step tables)")
     ap.add_argument("--repeats", type=int, default=5, help="--small: processes per case and checkout")
+    ap.add_argument("--before-name", help="--small: what --before is, for the table's note (default: its path)")
     args = ap.parse_args()
     from report import write_report
     if args.small:
-        return small(args.before, args.repeats)
+        return small(args.before, args.repeats, args.before_name)
     if args.tables:
         import csv
         with open(os.path.join(HERE, "many_bodies.csv")) as fh:
@@ -168,7 +169,7 @@ SMALL = [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-
 SMALL_START, SMALL_END = "<!-- small: written by bench_many_bodies.py --small -->", "<!-- /small -->"
 
 
-def small(before, repeats):
+def small(before, repeats, name=None):
     """The small scenes, this checkout and `before` alternating, `repeats` processes each (each: the better
     of two runs after a first, CPU time): the median over the processes, and their spread."""
     import statistics
@@ -197,7 +198,7 @@ def small(before, repeats):
         columns.append(("ratio", lambda r: f"{r['now:ms_per_step'] / r['before:ms_per_step']:.2f}", "now / before"))
     lines = [SMALL_START, "", f"CPU ms per step (the process's CPU time over the run, the better of two runs after a first "
              f"in each process), median of {repeats} processes per checkout, the checkouts alternating; "
-             f"load average {os.getloadavg()[0]:.1f} on 2 cores.  now: this checkout; before: {before}.", "",
+             f"load average {os.getloadavg()[0]:.1f} on 2 cores.  now: this checkout; before: {name or before}.", "",
              *table(rows, columns), "", SMALL_END]
     for name in ("many_bodies.md", "small_steps.md"):
         _replace_section(os.path.join(HERE, name), lines, "## Small steps" if name == "many_bodies.md" else None)
