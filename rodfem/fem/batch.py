@@ -12,7 +12,9 @@ if they were the cells of one disconnected mesh,
     coefficient slot of a cell ->  an index into S = (X, the other coefficients' values)
 
 and one C loop (rodfem/fem/fastassembly.py) calls the form's kernel for every cell of every body,
-each with its body's constants (copied from their values at each assembly, `refresh`).  The
+each with its body's constants (copied from their values at each assembly).  A residual, a Jacobian
+or a functional is one C call (a "job": the constants and other coefficients copied in, the
+coefficients gathered, the kernel loops; issue 26: a small step is a few dozen of them).  The
 coefficient x_{n+1} (the iterate) is read straight from X; every other coefficient (x_n, a load's
 Function) from its Function at `refresh`.  The gather indices are checked at build against DOLFINx's own packing
 (`pack_coefficients`), entry by entry: what the kernels see is what DOLFINx would give them, and
@@ -269,8 +271,9 @@ class FormBatch:
         return self.total.copy()
 
     def _make_job(self):
-        """The arguments of rodfem_scalar_job, made once: the segments of `refresh`, each integral's
-        arrays (by address; this object keeps them) and the sums."""
+        """The arguments of the jobs (rodfem_scalar_job, _vector_job, _matrix_job in
+        rodfem/fem/fastassembly.py), made once: the segments `refresh` copies, each integral's arrays
+        (by address; this object keeps them), the sums."""
         if not hasattr(self, "_other_views"):
             self._sources()
         ffi, p = self.mod.ffi, self._p
@@ -280,7 +283,9 @@ class FormBatch:
         self.total = np.zeros(self.nb)
         for it in self.integrals:
             it["sums"] = np.zeros(self.nb)
-        address = (lambda a: a.ctypes.data if a is not None else 0)
+
+        def address(a):   # (None: a NULL pointer)
+            return a.ctypes.data if a is not None else 0
         self._job_arrays = [
             np.array([it["n"] for it in self.integrals], np.int64),
             np.array([address(it["cells"]) for it in self.integrals], np.uintp),
