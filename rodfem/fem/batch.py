@@ -16,7 +16,7 @@ each with its body's constants (copied from their values at each assembly).  A r
 or a functional is one C call (a "job": the constants and other coefficients copied in, the
 coefficients gathered, the kernel loops; issue 26: a small step is a few dozen of them).  The
 coefficient x_{n+1} (the iterate) is read straight from X; every other coefficient (x_n, a load's
-Function) from its Function at `refresh`.  The gather indices are checked at build against DOLFINx's own packing
+Function) from its Function at each assembly.  The gather indices are checked at build against DOLFINx's own packing
 (`pack_coefficients`), entry by entry: what the kernels see is what DOLFINx would give them, and
 the sums are made in DOLFINx's order (integral by integral, cell by cell, body by body), so the
 batch's residual, Jacobian and functionals are DOLFINx's, bit for bit.
