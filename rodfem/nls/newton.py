@@ -61,6 +61,24 @@ PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSch
 # full Newton.
 LARGE = 10_000
 LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
+# The matrix patterns (with a zero on the diagonal) of the last KEEP Jacobians on which PETSc's LU met
+# a zero pivot in this process, and the LU Newton went on to (Newton._skip_doomed_lu).
+KEEP = 8
+_ZERO_PIVOTS = {}
+
+
+def pattern_key(A):
+    """A digest of a sequential AIJ matrix's nonzero pattern (its size and CSR structure)."""
+    import hashlib
+
+    from rodfem.fem import petsc_raw
+    i, j = petsc_raw.rowij(petsc_raw.blocks(A)[0])
+    h = hashlib.blake2b(digest_size=20)
+    h.update(i.tobytes())
+    h.update(j.tobytes())
+    return (A.getSize(), h.hexdigest())
+
+
 @dataclass
 class Solve:
     iterations: int
@@ -112,6 +130,7 @@ class Newton:
         self.prefix = prefix
         self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
         self._look_for_zero_pivots = comm.size == 1 and lu_name(self.settings) == "petsc"
+        self._pattern = None   # (its digest, when the first Jacobian has a zero on its diagonal)
         self.snes = None
         self.restart()
         self.serial = next(_COUNTER)   # the order of creation: the same on every rank
@@ -147,19 +166,27 @@ class Newton:
         self.timings["J"] += time.perf_counter() - t0
 
     def _skip_doomed_lu(self, A):
-        """The first Jacobian, serial, PETSc's LU selected: with a zero on the diagonal (multipliers)
-        go straight to LU_CHAIN's next stage (the partial LU, which orders those rows after the dofs
-        they constrain) before the PC is set up.  PETSc's LU, which does not pivot, met its zero pivot
-        there on every such Jacobian measured (the 3D rod, joints), and a failed factorization cost
-        the first step a wasted factorization and a repeated Newton solve (issue 26: 1.5 of the
-        6.6 ms of the 16-element 3D rod's first step)."""
+        """The first Jacobian, serial, PETSc's LU running, a zero on the diagonal (multipliers): if
+        PETSc's LU met a zero pivot on this matrix pattern before in this process (a system built
+        again: a parameter study, a scene run again), go straight to the LU Newton went on to then,
+        before the PC is set up.  (A zero diagonal alone does not doom PETSc's LU in RCM order: the
+        four-bar's joint multipliers get their pivots from the fill.)  A failed factorization costs
+        the first step a factorization and a repeated Newton solve (issue 26: 1.4 of the 6.6 ms of
+        the 16-element 3D rod's first step)."""
         self._look_for_zero_pivots = False
+        pc = self.snes.getKSP().getPC()   # (what runs: the user's -rodfem_pc_* options may have chosen another)
+        if pc.getType() != "lu" or pc.getFactorSolverType() != "petsc":
+            return
+        from rodfem.fem import petsc_raw
         diagonal = A.getDiagonal()
         try:
             zero = not diagonal.getArray(readonly=True).all()
         finally:
             diagonal.destroy()
-        following = next_lu(A, "petsc") if zero else None
+        if not zero or not petsc_raw.usable():
+            return
+        self._pattern = pattern_key(A)
+        following = _ZERO_PIVOTS.get(self._pattern)
         if following is not None:
             self.use_lu(following)
 
@@ -233,6 +260,11 @@ class Newton:
                 and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
             following = next_lu(self.A, lu)
             if following is not None:
+                if lu == "petsc" and self._pattern is not None:   # (remembered for the next Newton on it)
+                    _ZERO_PIVOTS.pop(self._pattern, None)
+                    if len(_ZERO_PIVOTS) >= KEEP:
+                        _ZERO_PIVOTS.pop(next(iter(_ZERO_PIVOTS)))
+                    _ZERO_PIVOTS[self._pattern] = following
                 self.use_lu(following)
                 return self._solve(step, t)
         its = self.snes.getIterationNumber()
