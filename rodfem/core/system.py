@@ -34,6 +34,7 @@ from rodfem.core.body import Body
 from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
+from rodfem.core.joint_ranks import RankJoints
 from rodfem.core.joints import Frame, Joint, MovingGround, Point
 from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.placement import Placement, here, owners, share_points
@@ -489,7 +490,7 @@ class System:
 
     def _push(self, X, which):
         self._segments(which).put(X.getArray(readonly=True))
-        if self.comm.size > 1 and not self.distributed:   # the ghosts
+        if self.comm.size > 1 and not self.layout.distributed:   # the ghosts (none: bodies whole on ranks)
             for r in self.bodies.values():
                 getattr(r.body, which).x.scatter_forward()
 
@@ -784,6 +785,9 @@ class PointIndex:
         plain = [j for j in self.joints if batchable(j)]
         self.batch = JointBatch(plain, self.fixed) if plain else None
         self.unbatched = [j for j in self.joints if self.batch is None or not batchable(j)]
+        # bodies placed whole on ranks: the plain joints' terms on the ranks of their rows (rodfem/core/joint_ranks.py)
+        self.ranked = RankJoints(plain, self.fixed, layout, layout.create_vector()) if layout.distributed and plain else None
+        self.rooted = self.ranked is None or bool(self.unbatched or self.components)   # terms computed on rank 0
         self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
@@ -792,8 +796,10 @@ class PointIndex:
         return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
 
     def step(self, X0, t0, t1, h):
-        """The step from x_n (X0) at t0 to t1 = t0 + h."""
-        self.x0_values, self.times = self.values(X0), (t0, t1, h)
+        """The step from x_n (X0) at t0 to t1 = t0 + h (x_n's values on rank 0 only if terms are computed there)."""
+        if self.ranked is not None:
+            self.ranked.step(X0)
+        self.x0_values, self.times = self.values(X0) if self.rooted else None, (t0, t1, h)
 
     def advance(self, X0, X1):
         """The stateful control laws' states at t_{n+1} (computed on rank 0, then the same on every rank)."""
@@ -903,6 +909,7 @@ class Couplings:
 
     def __init__(self, parts):
         self.parts = parts
+        self.local_rows = all(getattr(p, "local_rows", False) for p in parts)
 
     def entries(self):
         return [e for p in self.parts for e in p.entries()]
@@ -941,6 +948,12 @@ class JointRows:
         self.batch = points.batch if type(self).update is JointRows.update else None
         self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
+        # bodies placed whole on ranks: the plain joints on the ranks of their rows (rodfem/core/joint_ranks.py);
+        # `local_rows`: no term added to another rank's rows (the assembler skips the exchange of entries)
+        self.ranked = points.ranked if self.batch is not None else None
+        if self.ranked is not None:
+            self.batch = None
+        self.local_rows = self.ranked is not None and not self.joints and not self.components
         self._batch_work = 0.0
         self._sums = (0.0, 0.0)   # (work, dissipated) of the last residual, on rank 0: `work`, `dissipated`
         self._terms = []
@@ -948,6 +961,8 @@ class JointRows:
     def entries(self):
         """(rows, cols) of every entry the joints can fill (the same on every rank)."""
         out = self.batch.entries() if self.batch is not None else []
+        if self.ranked is not None and self.ranked.batch is not None:
+            out += self.ranked.batch.entries()
         for j in self.joints:
             v, q = j.v_index[j.rows], j.q_index[j.qcols]
             lam = j.lam_index
@@ -965,9 +980,14 @@ class JointRows:
         return out
 
     def update(self, X):
-        """The joints' terms at the iterate X (rank 0; nothing elsewhere)."""
-        vals = self.points.values(X)
+        """The joints' terms at the iterate X (rank 0; nothing elsewhere; the ranked joints on their ranks)."""
         self._terms, self._batch_work = [], 0.0
+        if self.ranked is not None:
+            t0, t1, h = self.points.times
+            self._batch_work = self.ranked.update(X, h, t0, t1)
+            if self.local_rows:
+                return
+        vals = self.points.values(X)
         if self.comm.rank == 0:
             v0 = self.points.x0_values
             t0, t1, h = self.points.times
@@ -989,6 +1009,8 @@ class JointRows:
         work, lost = self._batch_work, 0.0
         if self.batch is not None and self.comm.rank == 0:
             self.batch.residual(b)
+        if self.ranked is not None:
+            self.ranked.residual(b.getArray())
         for j, r_v, r_lam, _, w, d in self._terms:
             b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
                         addv=PETSc.InsertMode.ADD)
@@ -1001,7 +1023,11 @@ class JointRows:
     def _shared_sums(self):
         """(work, dissipated) of the last residual, the same on every rank (collective: read by the time
         loop once a step, not at every residual)."""
-        return self._sums if self.comm.size == 1 else self.comm.bcast(self._sums, root=0)
+        if self.comm.size == 1:
+            return self._sums
+        if self.ranked is not None:   # (each rank its joints' work)
+            return tuple(self.comm.allreduce(np.array(self._sums), op=MPI.SUM).tolist())
+        return self.comm.bcast(self._sums, root=0)
 
     @property
     def work(self):
@@ -1016,6 +1042,8 @@ class JointRows:
     def jacobian(self, X, A):
         if self.batch is not None and self.comm.rank == 0:
             self.batch.jacobian(A)
+        if self.ranked is not None:
+            self.ranked.jacobian(A)
         for j, _, _, blocks, _, _ in self._terms:
             index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(len(j.lam_index))))}
             for rk, ck, block in blocks:

@@ -124,7 +124,7 @@ class InterfaceSchur:
         A, _ = pc.getOperators()
         self.comm = A.getComm().tompi4py()
         if self.fallback is None:
-            nz = self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
+            nz = self._pattern_key(A)
             if nz != self.pattern:
                 self._split(A)
                 self.pattern = nz
@@ -139,6 +139,14 @@ class InterfaceSchur:
         self.fallback.setOperators(A)
         self.fallback.setUp()
         self.ready = True
+
+    def _pattern_key(self, A):
+        """What changes when A's nonzero pattern changes, the same on every rank: PETSc's nonzero state
+        (MatGetNonzeroState: an AIJ matrix's assembly sums its blocks' states over the ranks), with
+        A's identity; without the C library, the number of nonzeros summed over the ranks (collective)."""
+        if petsc_raw.usable():
+            return (A.handle, petsc_raw.nonzero_state(A))
+        return self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
 
     def apply(self, pc, b, x):
         """x = A^{-1} b; a singular A (no finite solution on some rank, or MUMPS refusing it) marks
@@ -388,10 +396,17 @@ class InterfaceSchur:
                 for v in values:
                     v.close()
             self.times["lu"] += time.perf_counter() - t0
-            if self.comm.allreduce(corner is not None, op=MPI.LAND):
+            # the ranks' corners summed and their zero pivots counted in one reduction
+            t1 = time.perf_counter()
+            sums = np.zeros(self.nG * self.nG + 1)
+            if corner is not None:
+                sums[:-1] = np.ravel(corner) if self.nG else 0.0
+            else:
+                sums[-1] = 1.0
+            sums = self.comm.allreduce(sums, op=MPI.SUM) if self.comm.size > 1 else sums
+            if sums[-1] == 0.0:
                 if self.nG:
-                    t1 = time.perf_counter()
-                    self.S = self.A_GG + self.comm.allreduce(corner.copy(), op=MPI.SUM)
+                    self.S = self.A_GG + sums[:-1].reshape(self.nG, self.nG)
                     self.times["S"] += time.perf_counter() - t1
                 return True
             self.solver, self.plu = FOLLOWING[self.solver], None
