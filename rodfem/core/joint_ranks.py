@@ -57,6 +57,11 @@ class RankJoints:
         v1 = self.values(X)
         return self.batch.update(self.x0, v1, h, t0, t1) if self.batch is not None else 0.0
 
+    def worst_gap(self, X, t):
+        """max |g(q) - g_p(t)| over this rank's joints at the state X (collective)."""
+        v = self.values(X)
+        return self.batch.worst_gap(v, t) if self.batch is not None else 0.0
+
     def residual(self, b):
         """Add the terms to this rank's rows of b (the array of this rank's part)."""
         if self.batch is not None and len(self.rows):

@@ -325,6 +325,7 @@ class System:
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._scalar_forms, self._x1_values = {}, np.zeros(self.layout.size_local)
+        self._evaluated = None   # the sums of the state x_{n+1}, in one reduction (`_evaluate`)
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
         self._monitored = [(r.name, r.body) for r in local if r.body.contacts]
@@ -497,6 +498,7 @@ class System:
     def set_state(self, X):
         """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
         self.build()
+        self._evaluated = None
         X.copy(self.X0)
         X.copy(self.X1)
         self._push(self.X0, "x0")
@@ -531,6 +533,7 @@ class System:
         for equal steps), x_n if `previous` is None; x_n is read from the bodies (a change made to a
         body's x0 between steps takes effect)."""
         self.build()
+        self._evaluated = None
         self._pull(self.X0, "x0")
         if previous is None:
             self.X0.copy(self.X1)
@@ -552,6 +555,7 @@ class System:
     def restore(self, snapshot):
         """x_n = x_{n+1} and the control laws' states of `snapshot`."""
         x, states = snapshot
+        self._evaluated = None
         self.X0.getArray()[:] = x
         self.X0.copy(self.X1)
         self._push(self.X0, "x0")
@@ -607,6 +611,7 @@ class System:
 
     def solve(self, step: int, t: float) -> Solve:
         """x_{n+1} at time t by Newton (raises NewtonFailure)."""
+        self._evaluated = None
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
         if self.body_contacts is not None:
@@ -615,6 +620,7 @@ class System:
 
     def accept(self):
         """x_n <- x_{n+1} (and the control laws' states); returns the old x_n (for the next prediction)."""
+        self._evaluated = None
         if any(getattr(c, "stateful", False) for c in self.components):
             self.points.advance(self.X0, self.X1)
         previous = self.X0.getArray(readonly=True).copy()
@@ -639,6 +645,48 @@ class System:
             totals = self.comm.allreduce(np.array(totals), op=MPI.SUM).tolist()
         return dict(zip(keys, totals))
 
+    def _evaluate(self):
+        """Under mpirun, the sums over the ranks a step's row needs, of the state x_{n+1}, in one reduction:
+        {key: total} of the bodies' H, work, dissipation and history columns ("obs:..."), the joints' and
+        components' supplied work and dissipated energy ("joints.work", "joints.dissipated"), and with the
+        joints' terms on the ranks of their rows (rodfem/core/joint_ranks.py, `_observed_on_ranks`) every
+        joint's multipliers ("lambda": each owned by one rank) and their largest position residual
+        ("constraint_residual").  Kept until the state changes (solve, predict, accept, set_state, restore)."""
+        if self._evaluated is not None:
+            return self._evaluated
+        X = self._x1_values
+        self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
+        keys = ["H", "work", "dissipation"] + self.columns
+        local = [sum(self._functionals(k).values(X)) for k in keys]
+        local += list(self.joint_rows._sums) if self.joint_rows is not None else [0.0, 0.0]
+        keys += ["joints.work", "joints.dissipated"]
+        ranked = self._observed_on_ranks()
+        if ranked:   # the multipliers (this rank's in their places) and the largest |g| of each rank
+            lam = np.zeros(len(self.layout.multipliers))
+            k, at = self.layout.owned_multipliers()
+            lam[k] = self.X1.getArray(readonly=True)[at]
+            gap = np.zeros(self.comm.size)
+            gap[self.comm.rank] = self.points.ranked.worst_gap(self.X1, self.points.times[1])
+            local = np.concatenate([local, lam, gap])
+        total = self.comm.allreduce(np.asarray(local, dtype=float), op=MPI.SUM)
+        out = dict(zip(keys, total[:len(keys)].tolist()))
+        if ranked:
+            n = len(self.layout.multipliers)
+            out["lambda"] = total[len(keys):len(keys) + n].tolist()
+            out["constraint_residual"] = float(np.max(total[len(keys) + n:]))
+        self._evaluated = out
+        return out
+
+    def _observed_on_ranks(self) -> bool:
+        """True when every joint's read-out comes from the ranks of its rows (bodies whole on ranks, the
+        plain joints only: no component, servo or marker read on rank 0)."""
+        p = self.points
+        return p is not None and p.ranked is not None and not p.rooted and not self.markers
+
+    def _total(self, key):
+        """The sum over the ranks of the functional `key` at x_{n+1} (collective)."""
+        return self._sum(key) if self.comm.size == 1 else self._evaluate()[key]
+
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
         if key not in self._scalar_forms:
@@ -658,10 +706,12 @@ class System:
         stored = self.points.stored_energy(self.X1) if self.components else 0.0
         if self.body_contacts is not None:
             stored += self.body_contacts.energy(self.X1)
-        return self._sum("H") + stored
+        return self._total("H") + stored
 
     def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports, the driven joints and the servos' inputs."""
+        if self.comm.size > 1:
+            return self._total("work") + self._evaluate()["joints.work"]
         joints = self.joint_rows.work if self.joint_rows is not None else 0.0
         return self._sum("work") + joints
 
@@ -677,6 +727,9 @@ class System:
 
     def dissipated_energy(self) -> float:
         """h d_n of the last step: the sum over the dissipating bodies, dampers and the contacts' friction."""
+        if self.comm.size > 1:
+            return (self._total("dissipation") + (self._evaluate()["joints.dissipated"] if self.components else 0.0)
+                    + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
         return (self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
                 + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
 
@@ -684,10 +737,18 @@ class System:
         """The history's columns of the state x_{n+1}."""
         self.build()
         obs = {}
-        columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
+        if self.comm.size > 1:
+            total = self._evaluate()
+            columns = {k[4:]: total[k] for k in self.columns}
+        else:
+            columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
         if self.single:
             obs.update(columns)
-        if self.points is not None:
+        if self._observed_on_ranks():   # (the same columns as PointIndex.observe)
+            obs.update(zip(self.points.lam_names, total["lambda"]))
+            if self.joints:
+                obs["constraint_residual"] = total["constraint_residual"]
+        elif self.points is not None:
             obs.update(self.points.observe(self.X1))
         if not self.single:
             obs.update(columns)
