@@ -386,7 +386,7 @@ class InterfaceSchur:
                                      method=self.solver, where=K["interior"],
                                      postpone=diagonal.array[K["interior"]] == 0)
                 diagonal.destroy()
-            Ad, Ao, _ = petsc_raw.blocks(A)
+            Ad, Ao, _ = petsc_raw.blocks(A, columns=False)
             values = [petsc_raw.Values(h, read=True) for h in (Ad, Ao) if h is not None]
             addresses = [v.open() for v in values]
             try:
