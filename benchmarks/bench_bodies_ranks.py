@@ -18,8 +18,10 @@ multipliers to the largest multiplier; the joints' position residual |g| to the 
 The machine is shared (2 cores, other developers' jobs beside these), so each run also gives each
 rank's CPU seconds of those steps (time.process_time: the rank's own work, and its busy waits in MPI
 calls, which Open MPI spends polling) and the load average before and after it.  Two ranks are run
-twice: as Open MPI starts them by default, and with `OMPI_MCA_mpi_yield_when_idle=1` (a rank that
-waits gives its core away: on a loaded machine the other rank, or another job, runs meanwhile).
+twice: as Open MPI starts them by default (each rank bound to a core of its own, polling while it
+waits), and with `--bind-to none` and `OMPI_MCA_mpi_yield_when_idle=1` (a rank runs on whichever core
+is free, and one that waits gives its core away: on a loaded machine the other rank, or another job,
+runs meanwhile).
 `--before CHECKOUT`: the same runs of another checkout (e.g. `git archive main | tar -x -C /tmp/before`),
 side by side.
 """
@@ -62,13 +64,14 @@ if MPI.COMM_WORLD.rank == 0:
 
 def once(N, steps, ranks, root=ROOT, polite=False):
     """(whole-process wall seconds, the child's figures, load averages before and after) of one run of
-    the checkout `root`; `polite`: Open MPI's ranks yield their core while they wait."""
+    the checkout `root`; `polite`: Open MPI's ranks unbound, yielding their core while they wait."""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.json")
         here = os.path.join(root, "benchmarks") if os.path.exists(os.path.join(root, "benchmarks", "bench_many_bodies.py")) else HERE
         cmd = [sys.executable, "-c", CHILD.format(here=here, N=N, steps=steps, out=out)]
         if ranks > 1:
-            cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks)] + cmd
+            cmd = ([shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks)]
+                   + (["--bind-to", "none"] if polite else []) + cmd)
         env = dict(os.environ, PYTHONPATH=root, OMP_NUM_THREADS="1")
         env.pop("OMPI_MCA_mpi_yield_when_idle", None)
         if polite:
@@ -94,7 +97,7 @@ def difference(a, b):
     return max(max(abs(u - v) for u, v in zip(x, b[k])) / max(scale[kind(k)], 1e-300) for k, x in a.items())
 
 
-VARIANTS = (("serial", 1, False), ("2 ranks", 2, False), ("2 ranks, yield", 2, True))
+VARIANTS = (("serial", 1, False), ("2 ranks", 2, False), ("2 ranks, unbound, yield", 2, True))
 
 
 def section(rows, runs, steps):
@@ -112,7 +115,7 @@ def section(rows, runs, steps):
             f"(imports, build, run), the median of {runs} runs, the variants in turn; ms/step: wall time of the "
             "steps after the first, in the process (median, and the best run); CPU ms/step per rank: "
             "time.process_time of those steps on each rank (median; Open MPI's busy waits count as CPU time); "
-            "yield: `OMPI_MCA_mpi_yield_when_idle=1`; load: the 1-minute load average before and after "
+            "unbound, yield: `mpirun --bind-to none` with `OMPI_MCA_mpi_yield_when_idle=1`; load: the 1-minute load average before and after "
             "the run (medians) on this 2-core machine, shared with other developers' jobs.  before: main "
             "before this work; now: this checkout.", "",
             *table(rows, columns), "",
