@@ -41,7 +41,7 @@ from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.core.spaces import dofs_per_element
 from rodfem.errors import ConstraintError
-from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max
+from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max, allreduce_sum
 from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
@@ -668,7 +668,7 @@ class System:
             gap = np.zeros(self.comm.size)
             gap[self.comm.rank] = self.points.ranked.worst_gap(self.X1, self.points.times[1])
             local = np.concatenate([local, lam, gap])
-        total = self.comm.allreduce(np.asarray(local, dtype=float), op=MPI.SUM)
+        total = allreduce_sum(self.comm, local)
         out = dict(zip(keys, total[:len(keys)].tolist()))
         if ranked:
             n = len(self.layout.multipliers)

@@ -353,3 +353,12 @@ def allreduce_max(comm, array):
     array = np.ascontiguousarray(array, dtype=float if np.asarray(array).dtype.kind == "f" else np.int64)
     comm.Allreduce(MPI.IN_PLACE, array, op=MPI.MAX)
     return array
+
+
+def allreduce_sum(comm, array):
+    """The sum over the ranks of a float array, as a new array (one MPI_Allreduce on its buffer: without
+    mpi4py's pickling of the lower-case allreduce, microseconds instead of tens of them)."""
+    array = np.array(array, dtype=float, order="C")
+    if comm.size > 1:
+        comm.Allreduce(MPI.IN_PLACE, array, op=MPI.SUM)
+    return array

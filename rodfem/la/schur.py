@@ -57,6 +57,7 @@ from petsc4py import PETSc
 from scipy.linalg import LinAlgWarning
 
 from rodfem.fem import petsc_raw
+from rodfem.fem.assembly import allreduce_sum
 from rodfem.la.partial_lu import PartialLU
 
 INTERIOR_SOLVERS = ("rcm", "nd", "amd", "superlu", "mumps")   # rcm, nd, amd: rodfem/la/partial_lu.py, that order
@@ -166,7 +167,7 @@ class InterfaceSchur:
             x.set(np.nan)
         with np.errstate(invalid="ignore"):
             finite = bool(np.all(np.isfinite(x.getArray(readonly=True))))
-        if not self.comm.allreduce(finite, op=MPI.LAND):
+        if allreduce_sum(self.comm, [0.0 if finite else 1.0])[0] > 0.0:   # (any rank's solution not finite)
             petsc_raw.pc_set_failed(pc)
 
     def _apply(self, b, x):
@@ -181,7 +182,7 @@ class InterfaceSchur:
             if self.nG:
                 g = np.zeros(self.nG)
                 g[self.G_own_pos] = barr[self.G_own]
-                xG = self._solve_interface(self.comm.allreduce(g + zG, op=MPI.SUM))
+                xG = self._solve_interface(allreduce_sum(self.comm, g + zG))
             out = x.getArray()
             self.plu.backward(xG, out)
             if self.nG:
@@ -196,7 +197,7 @@ class InterfaceSchur:
             g = np.zeros(self.nG)
             g[self.G_own_pos] = barr[self.G_own]
             g -= self.AGC @ y[self.C]
-            xG = self._solve_interface(self.comm.allreduce(g, op=MPI.SUM))
+            xG = self._solve_interface(allreduce_sum(self.comm, g))
             if len(self.ZG):
                 y = y - self.Z @ xG[self.ZG]
             y[self.G_own] = xG[self.G_own_pos]
@@ -360,7 +361,7 @@ class InterfaceSchur:
             block = np.zeros((self.nG, len(self.cols_GC)))
             if len(self.rows_Gown):
                 block[self.G_own_pos] = A.getValues(self.rows_Gown, self.cols_GC)
-            block = self.comm.allreduce(block, op=MPI.SUM)
+            block = allreduce_sum(self.comm, block)
             self.A_GG = block[:, :self.nG]
             self.AGC = np.ascontiguousarray(block[:, self.nG + self.C_pos])
         T["extract"] += time.perf_counter() - t0
@@ -403,7 +404,7 @@ class InterfaceSchur:
                 sums[:-1] = np.ravel(corner) if self.nG else 0.0
             else:
                 sums[-1] = 1.0
-            sums = self.comm.allreduce(sums, op=MPI.SUM) if self.comm.size > 1 else sums
+            sums = allreduce_sum(self.comm, sums)
             if sums[-1] == 0.0:
                 if self.nG:
                     self.S = self.A_GG + sums[:-1].reshape(self.nG, self.nG)
