@@ -2,6 +2,9 @@
 
     .venv/bin/python benchmarks/bench_many_bodies.py [--before CHECKOUT] [--quick]
                                                     # -> benchmarks/many_bodies.{csv,md}
+    .venv/bin/python benchmarks/bench_many_bodies.py --small --before CHECKOUT [--repeats 5]
+                                                    # -> benchmarks/small_steps.csv, the small-step
+                                                    #    tables of many_bodies.md and small_steps.md
 
 A hanging chain of N planar steel beams pinned end to end (the first pinned to the ground), 128
 elements in total (N = 256, 1000: one element per beam), falling from horizontal under gravity:
@@ -122,8 +125,14 @@ def main():
     ap.add_argument("--before", help="another checkout to measure side by side (e.g. main before this work)")
     ap.add_argument("--quick", action="store_true", help="N up to 64, no 1000-body chain")
     ap.add_argument("--tables", action="store_true", help="only write many_bodies.md again from many_bodies.csv")
+    ap.add_argument("--small", action="store_true", help="only the small scenes, this checkout and --before in turn, "
+                    "--repeats processes each: medians (the small-step tables)")
+    ap.add_argument("--repeats", type=int, default=5, help="--small: processes per case and checkout")
+    ap.add_argument("--before-name", help="--small: what --before is, for the table's note (default: its path)")
     args = ap.parse_args()
     from report import write_report
+    if args.small:
+        return small(args.before, args.repeats, args.before_name)
     if args.tables:
         import csv
         with open(os.path.join(HERE, "many_bodies.csv")) as fh:
@@ -153,6 +162,62 @@ def main():
             print(row["case"], label, r, flush=True)
         rows.append(row)
     report(rows, [label for label, _, _ in codes], write_report, os.getloadavg()[0])
+
+
+SMALL = [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-3d", 10, 200),
+         ("scene", "flying-spaghetti-3d", 16, 10), ("scene", "flying-spaghetti-3d", 16, 1000)]
+SMALL_START, SMALL_END = "<!-- small: written by bench_many_bodies.py --small -->", "<!-- /small -->"
+
+
+def small(before, repeats, name=None):
+    """The small scenes, this checkout and `before` alternating, `repeats` processes each (each: the better
+    of two runs after a first, CPU time): the median over the processes, and their spread."""
+    import statistics
+    codes = [("now", ROOT)] + ([("before", os.path.abspath(before))] if before else [])
+    rows = []
+    for case in SMALL:
+        row = {"case": f"{case[1]} ({case[2]} el.)", "steps": case[3]}
+        runs = {label: [] for label, _ in codes}
+        for _ in range(repeats):
+            for label, checkout in codes:
+                runs[label].append(child(case, True, checkout))
+        for label, _ in codes:
+            ms = [r["ms_per_step"] for r in runs[label]]
+            row[f"{label}:ms_per_step"] = statistics.median(ms)
+            row[f"{label}:min"], row[f"{label}:max"] = min(ms), max(ms)
+            row[f"{label}:newton_its"] = runs[label][0]["newton_its"]
+        print(row, flush=True)
+        rows.append(row)
+    from report import table, write_csv
+    write_csv("small_steps", rows)
+    columns = [("case", "{}", "scene"), ("steps", "{}")]
+    for label, _ in codes:
+        columns += [(f"{label}:ms_per_step", "{:.3f}", f"ms/step {label} (median)"),
+                    (f"{label}:range", lambda r, k=label: f"{r[k + ':min']:.3f}-{r[k + ':max']:.3f}", f"{label}: range")]
+    if before:
+        columns.append(("ratio", lambda r: f"{r['now:ms_per_step'] / r['before:ms_per_step']:.2f}", "now / before"))
+    lines = [SMALL_START, "", f"CPU ms per step (the process's CPU time over the run, the better of two runs after a first "
+             f"in each process), median of {repeats} processes per checkout, the checkouts alternating; "
+             f"load average {os.getloadavg()[0]:.1f} on 2 cores.  now: this checkout; before: {name or before}.", "",
+             *table(rows, columns), "", SMALL_END]
+    for name in ("many_bodies.md", "small_steps.md"):
+        _replace_section(os.path.join(HERE, name), lines, "## Small steps" if name == "many_bodies.md" else None)
+    print("\n".join(lines))
+
+
+def _replace_section(path, lines, heading):
+    """The lines between SMALL_START and SMALL_END of the file at path replaced (if they are not there: the
+    section under `heading` up to the next one, or the end of the file)."""
+    text = open(path).read().split("\n") if os.path.exists(path) else []
+    if SMALL_START in text:
+        a, b = text.index(SMALL_START), text.index(SMALL_END) + 1
+    elif heading in text:
+        a = text.index(heading) + 2
+        b = next((i for i in range(a, len(text)) if text[i].startswith("## ")), len(text)) - 1
+    else:
+        a = b = len(text)
+    with open(path, "w") as fh:
+        fh.write("\n".join(text[:a] + lines + text[b:]))
 
 
 def report(rows, codes, write_report, load):

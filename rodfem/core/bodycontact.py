@@ -53,6 +53,26 @@ dofs; rods are long and thin, so this is n_nodes x 3 numbers), which computes th
 their forces to the global rows; the energy and the columns are broadcast.
 
 The rows of supported (Dirichlet) nodes are left alone: their reaction takes the force.
+
+No passing through within a step (`crossing`): the penalty acts only where a pair is in contact at x_n,
+x_m or x_{n+1}, so a step that moves two segments across each other can cross them (a step that takes
+them from one side to the other with neither end in contact feels no force at all).  Along the straight
+path X(tau) = X_n + tau dX, tau in [0, 1], the points of the two segments move relatively by at most
+s = max over node pairs (i of a, j of b) |dx_i - dy_j| (the relative motion of two points is a convex
+combination of these), so their distance d(tau) >= max(d_n - tau s, d_{n+1} - (1 - tau) s), and
+
+    min over tau of d(tau) >= c = (d_n + d_{n+1} - s) / 2      (the pair's certified clearance).
+
+c > 0 proves that the step did not pass the two segments through each other (c = 0 exactly for a
+head-on pass through d = 0, so the test needs a margin); a step is accepted when every candidate pair
+(the broad phase's spheres over x_n and x_{n+1}: the pairs whose swept segments can meet at all) has
+c >= CLEARANCE R, i.e. along the whole path the tubes overlap by less than half the reach R: the
+penalty acted at every stage of an approach, and no pair was carried deep into (or through) the other.
+A step where a pair does not is refused (`System.solve` raises a NewtonFailure, so the time loop retries
+it from x_n and then splits it into sub-steps, rodfem/analysis/stepping.py).  The test is sufficient,
+not necessary: it may refuse a step that did not cross (a pair in contact sliding by more than about
+R in one step), never accept one that did.  A refused step is not part of the solution, so the energy
+balance of the accepted (sub-)steps is untouched.
 """
 import time
 
@@ -64,6 +84,7 @@ from rodfem.errors import ConstraintError
 
 FD_STEP = 1e-7      # Newton's matrix: central differences with steps FD_STEP R
 RIGID_BELOW = 1e-6  # |P dX| <= RIGID_BELOW R: no correction (see the module docstring)
+CLEARANCE = 0.5     # a step is accepted when each pair's certified clearance is >= CLEARANCE R (the docstring)
 
 
 def close_pairs(centres, radii, others=None, other_radii=None):
@@ -380,6 +401,29 @@ class BodyContacts:
                      p.stack(v1[id(p.a)], None if p.self_contact else v1[id(p.b)], pairs)) if rubs else None
                 self._terms.append((p, pairs, X0, X1, w, V))
         self.seconds["search"] += time.process_time() - start
+
+    def crossing(self, X):
+        """The smallest certified clearance of the step x_n -> X (module docstring) over the pairings'
+        candidate pairs: (c / R, name, pair), c = (d_n + d_{n+1} - s) / 2 (> 0: no pair can have crossed;
+        inf without candidates), collective (the same on every rank)."""
+        x1 = self.nodes(X)
+        worst = (np.inf, "", (-1, -1))
+        if self.comm.rank == 0:
+            for p in self.pairings:
+                a, b = id(p.a), None if p.self_contact else id(p.b)
+                pairs = p.candidates((self.x0[a], x1[a]), None if b is None else (self.x0[b], x1[b]), (0, 1))
+                if not len(pairs):
+                    continue
+                X0 = p.stack(self.x0[a], None if b is None else self.x0[b], pairs)
+                X1 = p.stack(x1[a], None if b is None else x1[b], pairs)
+                dX = X1 - X0
+                rel = dX[:, :2, None, :] - dX[:, None, 2:, :]            # dx_i - dy_j (m, 2, 2, 3)
+                s = np.sqrt(np.einsum("mijk,mijk->mij", rel, rel)).max(axis=(1, 2))
+                margin = 0.5 * (p.distance(X0) + p.distance(X1) - s) / max(p.R, 1e-300)
+                k = int(np.argmin(margin))
+                if margin[k] < worst[0]:
+                    worst = (float(margin[k]), p.name, tuple(int(i) for i in pairs[k]))
+        return self.comm.bcast(worst, root=0)
 
     def _free(self, index):
         """The global indices `index` with the supported ones replaced by -1 (PETSc ignores those)."""

@@ -83,7 +83,7 @@ class Load:
             u = np.asarray(self.value(t), dtype=float)
         except (TypeError, ValueError) as e:
             raise InputError(f"load {self.name}: its value at t = {t:g} is not an array of numbers ({e})") from None
-        if not np.all(np.isfinite(u)):
+        if not np.isfinite(u).all():
             raise InputError(f"load {self.name}: its value at t = {t:g} is not finite ({u})")
         return u
 

@@ -31,7 +31,7 @@ from petsc4py import PETSc
 
 from rodfem.common.limits import check_elements
 from rodfem.core.body import Body
-from rodfem.core.bodycontact import BodyContacts, check_law, fixed_dofs
+from rodfem.core.bodycontact import CLEARANCE, BodyContacts, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joint_ranks import RankJoints
@@ -40,7 +40,7 @@ from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.core.spaces import dofs_per_element
-from rodfem.errors import ConstraintError
+from rodfem.errors import ConstraintError, NewtonFailure
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max, allreduce_sum
 from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
@@ -85,6 +85,7 @@ class System:
     distribute = False  # the default under mpirun: every body's mesh over all ranks (rodfem/core/placement.py)
     batch = True   # the default: bodies of the same compiled forms assembled together (serial)
     share = True   # the default: bodies of one kind share their mesh and compiled forms (rodfem/core/kinds.py)
+    guard_crossing = True   # refuse (and so split) a step whose contact pairs may pass through each other
 
     def __init__(self, integrator: str = "midpoint", comm=MPI.COMM_WORLD, newton_options: Optional[dict] = None,
                  momentum: Optional[bool] = None, batch: Optional[bool] = None, share: Optional[bool] = None,
@@ -610,13 +611,21 @@ class System:
         return self.X1.getArray(readonly=True).copy()
 
     def solve(self, step: int, t: float) -> Solve:
-        """x_{n+1} at time t by Newton (raises NewtonFailure)."""
+        """x_{n+1} at time t by Newton (raises NewtonFailure; also for a step whose contact pairs may have passed
+        through each other: rodfem/core/bodycontact.py, `BodyContacts.crossing`)."""
         self._evaluated = None
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
         if self.body_contacts is not None:
             self.body_contacts.step(self.X0, self.dt)
-        return self.newton.solve(step, t)
+        solve = self.newton.solve(step, t)
+        if self.body_contacts is not None and self.guard_crossing:
+            clearance, name, pair = self.body_contacts.crossing(self.X1)
+            if not clearance >= CLEARANCE:
+                raise NewtonFailure(step, t, solve.residual, solve.iterations,
+                                    f"contact {name}: segments {pair} come within {clearance:.3g} R of each other "
+                                    f"in the step (at least {CLEARANCE:g} R: they may pass through each other)")
+        return solve
 
     def accept(self):
         """x_n <- x_{n+1} (and the control laws' states); returns the old x_n (for the next prediction)."""

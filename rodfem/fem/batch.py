@@ -12,9 +12,11 @@ if they were the cells of one disconnected mesh,
     coefficient slot of a cell ->  an index into S = (X, the other coefficients' values)
 
 and one C loop (rodfem/fem/fastassembly.py) calls the form's kernel for every cell of every body,
-each with its body's constants (copied from their values at each assembly, `refresh`).  The
+each with its body's constants (copied from their values at each assembly).  A residual, a Jacobian
+or a functional is one C call (a "job": the constants and other coefficients copied in, the
+coefficients gathered, the kernel loops; issue 26: a small step is a few dozen of them).  The
 coefficient x_{n+1} (the iterate) is read straight from X; every other coefficient (x_n, a load's
-Function) from its Function at `refresh`.  The gather indices are checked at build against DOLFINx's own packing
+Function) from its Function at each assembly.  The gather indices are checked at build against DOLFINx's own packing
 (`pack_coefficients`), entry by entry: what the kernels see is what DOLFINx would give them, and
 the sums are made in DOLFINx's order (integral by integral, cell by cell, body by body), so the
 batch's residual, Jacobian and functionals are DOLFINx's, bit for bit.
@@ -60,10 +62,14 @@ class Segments:
         self.off = np.asarray(los, dtype=np.int64)
         self.len = np.asarray(lengths, dtype=np.int64)
 
+        ffi = self.mod.ffi   # (the fixed arguments' views made once: a small step calls this ~10 times)
+        self._fixed = (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
+                       ffi.from_buffer("int64_t[]", self.len))
+
     def _args(self, X, kind):
-        ffi = self.mod.ffi
-        return (len(self.ptr), ffi.from_buffer("uintptr_t[]", self.ptr), ffi.from_buffer("int64_t[]", self.off),
-                ffi.from_buffer("int64_t[]", self.len), ffi.from_buffer(kind, X))
+        # (X's view made at each call and dropped: a view kept would keep X, and an array of a PETSc
+        # Vec kept is a Vec whose changes PETSc does not see, e.g. its cached norm)
+        return self._fixed + (self.mod.ffi.from_buffer(kind, X),)
 
     def put(self, X):
         """Every Function <- its segment of X."""
@@ -155,7 +161,9 @@ class FormBatch:
                 cells=np.ascontiguousarray(np.concatenate(cells), dtype=np.int32),
                 facets=np.ascontiguousarray(np.concatenate(fac), dtype=np.int32) if facets is not None else None,
                 body=np.ascontiguousarray(np.concatenate(body)), index=index, cstride=index.shape[1],
+                flat=np.ascontiguousarray(index, dtype=np.int64).ravel(),   # (the gather's index, flat)
                 coeffs=np.zeros(max(index.size, 1)), key=(itype, i)))
+            self.integrals[-1]["target"] = self.integrals[-1]["coeffs"][:index.size]
         self._pointers(ffi)
         self.refresh()
         self._check(iterates, offsets)
@@ -187,11 +195,6 @@ class FormBatch:
         buf = ffi.from_buffer
         self._p = dict(x=buf("double[]", self.x), xdofs=buf("int32_t[]", self.xdofs),
                        dofs=buf("int32_t[]", self.dofs))
-        for it in self.integrals:
-            it["p_cells"] = buf("int32_t[]", it["cells"])
-            it["p_facets"] = buf("int32_t[]", it["facets"]) if it["facets"] is not None else ffi.NULL
-            it["p_body"] = buf("int32_t[]", it["body"])
-            it["p_coeffs"] = buf("double[]", it["coeffs"])
 
     def _check(self, iterates, offsets):
         """The gathered coefficients equal DOLFINx's packing, body by body (else ValueError)."""
@@ -242,50 +245,79 @@ class FormBatch:
         self.S[:self.size] = X
         for it in self.integrals:
             if it["cstride"]:
-                np.take(self.S, it["index"].ravel(), out=it["coeffs"][:it["index"].size])
+                self.S.take(it["flat"], out=it["target"])
 
     def vector(self, X, b):
-        """b[rows of X] += the residual of every body (b: an array like X)."""
-        self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
-        out = ffi.from_buffer("double[]", b)
-        for it in self.integrals:
-            lib.rodfem_batch_vector(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nd, p["dofs"],
-                                    self.nx, p["xdofs"], p["x"], it["p_coeffs"], it["cstride"], p["consts"],
-                                    it["p_body"], self.kstride, out)
+        """b[rows of X] += the residual of every body (b: an array like X), its constants and other
+        coefficients read now (`refresh`, the gather and the kernel loops in one C call, rodfem_vector_job)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        ffi = self.mod.ffi
+        self.mod.lib.rodfem_vector_job(*self._job, ffi.from_buffer("double[]", X), *self._job_integrals[:9],
+                                       self.nd, self._p["dofs"], self.nx, self._p["xdofs"], self._p["x"],
+                                       self.kstride, ffi.from_buffer("double[]", b))
 
     def scalars(self, X):
-        """Each body's value of the functional at X."""
-        self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
-        total = np.zeros(self.nb)
-        for it in self.integrals:   # (DOLFINx: each integral's sum, then their sum)
-            out = np.zeros(self.nb)
-            lib.rodfem_batch_scalar(it["n"], it["p_cells"], it["p_facets"], it["address"], self.nx, p["xdofs"],
-                                    p["x"], it["p_coeffs"], it["cstride"], p["consts"], it["p_body"], self.kstride,
-                                    ffi.from_buffer("double[]", out))
-            total += out
-        return total
+        """Each body's value of the functional at X, its constants and other coefficients read now
+        (`refresh`, the gather and each integral's kernel loop in one C call, rodfem_scalar_job:
+        the step's H, work and columns are a dozen functionals of a few cells each)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        self.mod.lib.rodfem_scalar_job(*self._job, self.mod.ffi.from_buffer("double[]", X), *self._job_integrals)
+        return self.total.copy()
+
+    def _make_job(self):
+        """The arguments of the jobs (rodfem_scalar_job, _vector_job, _matrix_job in
+        rodfem/fem/fastassembly.py), made once: the segments `refresh` copies, each integral's arrays
+        (by address; this object keeps them), the sums."""
+        if not hasattr(self, "_other_views"):
+            self._sources()
+        ffi, p = self.mod.ffi, self._p
+        none = (0, ffi.NULL, ffi.NULL, ffi.NULL)
+        consts = self._const_views._fixed if self._const_views is not None else none
+        others = self._other_views._fixed if self._other_views is not None else none
+        self.total = np.zeros(self.nb)
+        for it in self.integrals:
+            it["sums"] = np.zeros(self.nb)
+
+        def address(a):   # (None: a NULL pointer)
+            return a.ctypes.data if a is not None else 0
+        self._job_arrays = [
+            np.array([it["n"] for it in self.integrals], np.int64),
+            np.array([address(it["cells"]) for it in self.integrals], np.uintp),
+            np.array([address(it["facets"]) for it in self.integrals], np.uintp),
+            np.array([it["address"] for it in self.integrals], np.uintp),
+            np.array([address(it["coeffs"]) for it in self.integrals], np.uintp),
+            np.array([it["cstride"] for it in self.integrals], np.int64),
+            np.array([address(it["flat"]) for it in self.integrals], np.uintp),
+            np.array([address(it["body"]) for it in self.integrals], np.uintp),
+            np.array([address(it["sums"]) for it in self.integrals], np.uintp)]
+        kinds = ("int64_t[]", "uintptr_t[]", "uintptr_t[]", "uintptr_t[]", "uintptr_t[]", "int64_t[]", "uintptr_t[]",
+                 "uintptr_t[]", "uintptr_t[]")
+        self._job = (*consts, p["consts"], *others, ffi.from_buffer("double[]", self.S), self.size)
+        self._job_integrals = (len(self.integrals), *(ffi.from_buffer(k, a) for k, a in zip(kinds, self._job_arrays)),
+                               self.nx, p["xdofs"], p["x"], self.kstride, self.nb,
+                               ffi.from_buffer("double[]", self.total))
 
     def add_matrix(self, X, bc, nown, da, di, dj, ghost, room):
         """Add the bilinear form at X into the CSR values da (structure di, dj; rows and columns with
         bc[row] set left out); entries without a place go to room = (rows, cols, values) for
-        MatSetValues.  Returns their number, or -1 if room was too small."""
-        self._coefficients(X)
-        ffi, lib, p = self.mod.ffi, self.mod.lib, self._p
+        MatSetValues.  Returns their number, or -1 if room was too small.  The constants and other
+        coefficients read now (`refresh`, the gather and rodfem_assemble in one C call, rodfem_matrix_job)."""
+        if not hasattr(self, "_job"):
+            self._make_job()
+        if self._job[0] == 0 and self.kstride:   # (constants without views: packed here)
+            self.refresh()
+        ffi, p = self.mod.ffi, self._p
         grow, gcol, gval = room
-        total = 0
-        for it in self.integrals:
-            ng = lib.rodfem_assemble(
-                it["n"], it["p_cells"], it["p_facets"], it["address"], self.nd, p["dofs"], self.nx, p["xdofs"],
-                p["x"], it["p_coeffs"], it["cstride"], p["consts"], bc, nown, di, dj, da,
-                ffi.NULL, ffi.NULL, ffi.NULL, ghost,
-                ffi.from_buffer("int32_t[]", grow[total:]), ffi.from_buffer("int32_t[]", gcol[total:]),
-                ffi.from_buffer("double[]", gval[total:]), len(grow) - total, 0, it["p_body"], self.kstride)
-            if ng < 0:
-                return -1
-            total += ng
-        return total
+        return self.mod.lib.rodfem_matrix_job(
+            *self._job, ffi.from_buffer("double[]", X), *self._job_integrals[:9], self.nd, p["dofs"], self.nx,
+            p["xdofs"], p["x"], self.kstride, bc, nown, di, dj, da, ghost, ffi.from_buffer("int32_t[]", grow),
+            ffi.from_buffer("int32_t[]", gcol), ffi.from_buffer("double[]", gval), len(grow))
 
 
 class BlockBatch:
@@ -321,9 +353,8 @@ class BlockBatch:
         self._room(1024)
 
     def refresh(self):
-        """Constants, x_n and the other coefficients, the Dirichlet values (one copy each: at every
-        assembly, as DOLFINx reads them)."""
-        self.F.refresh()
+        """The Dirichlet values (at every assembly, as DOLFINx reads them; the residual's constants, x_n
+        and other coefficients: read by its kernel loop's call, FormBatch.vector)."""
         if self._g:
             self.g = np.concatenate([g[dofs] for g, dofs in self._g])
 
@@ -352,6 +383,10 @@ class BlockBatch:
     def _structure(self, shared):
         self.diag = shared[0]
         self.bc_diag = np.concatenate([blk.fast.bc_diag for blk in self.blocks])
+        ffi = self.J.mod.ffi   # (the views add_jacobian passes, made again with the structure)
+        self._views = (ffi.from_buffer("int8_t[]", self.bc), ffi.from_buffer("int32_t[]", self.diag.i),
+                       ffi.from_buffer("int32_t[]", self.diag.j), ffi.from_buffer("int32_t[]", np.zeros(1, np.int32)),
+                       ffi.from_buffer("int64_t[]", self.bc_diag))
 
     def set_state(self, X):
         """(The iterate is read from X at assembly.)"""
@@ -384,15 +419,13 @@ class BlockBatch:
     def add_jacobian(self, A, X):
         """Add the bodies' Jacobians into A (zeroed before); False when the room for entries outside
         the pattern was too small (it is doubled: zero A and try again)."""
-        self.J.refresh()
         ffi = self.J.mod.ffi
         da = ffi.cast("double*", self.diag.open())
+        bc, di, dj, no_ghost, bc_diag = self._views
         try:
-            ng = self.J.add_matrix(X, ffi.from_buffer("int8_t[]", self.bc), self.size, da,
-                                   ffi.from_buffer("int32_t[]", self.diag.i), ffi.from_buffer("int32_t[]", self.diag.j),
-                                   ffi.from_buffer("int32_t[]", np.zeros(1, np.int32)), self.room)
+            ng = self.J.add_matrix(X, bc, self.size, da, di, dj, no_ghost, self.room)
             if ng >= 0 and len(self.bc_diag):
-                self.J.mod.lib.rodfem_set(da, len(self.bc_diag), ffi.from_buffer("int64_t[]", self.bc_diag), 1.0)
+                self.J.mod.lib.rodfem_set(da, len(self.bc_diag), bc_diag, 1.0)
         finally:
             self.diag.close()
         if ng < 0:
@@ -451,9 +484,10 @@ class Functionals:
 
     def values(self, X):
         """Each body's value at X (X: the system's x_{n+1}; the bodies' other coefficients as they are)."""
+        if not self.single and len(self.batches) == 1 and self.batches[0][1] == self.order:   # (one batch: its order)
+            return self.batches[0][0].scalars(X).tolist()
         out = {}
         for batch, members in self.batches:
-            batch.refresh()
             out.update(zip(members, batch.scalars(X).tolist()))
         for b in self.single:
             out[b] = self._assemble(self.forms[b])

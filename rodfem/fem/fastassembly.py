@@ -230,6 +230,95 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
            facets ? facets + e : NULL, &perm);   /* the kernel adds to its body's sum, as in DOLFINx */
   }
 }
+
+/* Jobs of a batch (rodfem/fem/batch.py), each in one call.  job_inputs: the constants' and the
+   other coefficients' values copied in (segments k: to[off[k]:off[k] + len[k]] <- the array at
+   ptr[k]), X into S[0:size]; job_gather: integral i's coefficients, coeffs[k] = S[index[k]]. */
+static void job_inputs(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X)
+{
+  for (int k = 0; k < nc; ++k) memcpy(consts + coff[k], (const double*)cptr[k], sizeof(double) * clen[k]);
+  for (int k = 0; k < no; ++k) memcpy(S + ooff[k], (const double*)optr[k], sizeof(double) * olen[k]);
+  memcpy(S, X, sizeof(double) * size);
+}
+
+static double* job_gather(int i, const int64_t* n, const uintptr_t* coeffs, const int64_t* cstride,
+                          const uintptr_t* index, const double* S)
+{
+  double* c = (double*)coeffs[i];
+  const int64_t* idx = (const int64_t*)index[i];
+  const int64_t m = n[i] * cstride[i];
+  for (int64_t k = 0; k < m; ++k) c[k] = S[idx[k]];
+  return c;
+}
+
+/* A functional: integral by integral its kernel run into sums (one per body), total += sums, as
+   rodfem_batch_scalar and numpy did it one call each. */
+void rodfem_scalar_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body, const uintptr_t* sums,
+                       int nx, const int32_t* xdofs, const double* x, int kstride, int nb, double* total)
+{
+  job_inputs(nc, cptr, coff, clen, consts, no, optr, ooff, olen, S, size, X);
+  for (int b = 0; b < nb; ++b) total[b] = 0.0;
+  for (int i = 0; i < ni; ++i) {
+    const double* c = job_gather(i, n, coeffs, cstride, index, S);
+    double* s = (double*)sums[i];
+    for (int b = 0; b < nb; ++b) s[b] = 0.0;
+    rodfem_batch_scalar((int)n[i], (const int32_t*)cells[i], (const int32_t*)facets[i], address[i], nx, xdofs, x,
+                        c, (int)cstride[i], consts, (const int32_t*)body[i], kstride, s);
+    for (int b = 0; b < nb; ++b) total[b] += s[b];
+  }
+}
+
+/* A Jacobian: every integral's element matrices added by rodfem_assemble (integral by integral, the
+   entries without a place after one another in grow, gcol, gval); their number, or -1 if gcap was too small. */
+int rodfem_matrix_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                      int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                      int64_t size, const double* X,
+                      int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                      const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                      const uintptr_t* index, const uintptr_t* body,
+                      int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x, int kstride,
+                      const int8_t* bc, int nown, const int32_t* di, const int32_t* dj, double* da,
+                      const int32_t* ghost_col, int32_t* grow, int32_t* gcol, double* gval, int gcap)
+{
+  job_inputs(nc, cptr, coff, clen, consts, no, optr, ooff, olen, S, size, X);
+  int total = 0;
+  for (int i = 0; i < ni; ++i) {
+    const double* c = job_gather(i, n, coeffs, cstride, index, S);
+    int ng = rodfem_assemble((int)n[i], (const int32_t*)cells[i], (const int32_t*)facets[i], address[i], nd, dofs,
+                             nx, xdofs, x, c, (int)cstride[i], consts, bc, nown, di, dj, da, NULL, NULL, NULL,
+                             ghost_col, grow + total, gcol + total, gval + total, gcap - total, 0,
+                             (const int32_t*)body[i], kstride);
+    if (ng < 0)
+      return -1;
+    total += ng;
+  }
+  return total;
+}
+
+/* A residual: out[rows] += every integral's element vectors (rodfem_batch_vector, integral by integral). */
+void rodfem_vector_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body,
+                       int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x, int kstride,
+                       double* out)
+{
+  job_inputs(nc, cptr, coff, clen, consts, no, optr, ooff, olen, S, size, X);
+  for (int i = 0; i < ni; ++i) {
+    const double* c = job_gather(i, n, coeffs, cstride, index, S);
+    rodfem_batch_vector((int)n[i], (const int32_t*)cells[i], (const int32_t*)facets[i], address[i], nd, dofs, nx,
+                        xdofs, x, c, (int)cstride[i], consts, (const int32_t*)body[i], kstride, out);
+  }
+}
 """
 
 C_DECL = """
@@ -253,6 +342,30 @@ void rodfem_batch_scalar(int n, const int32_t* cells, const int32_t* facets, uin
                          int nx, const int32_t* xdofs, const double* x,
                          const double* coeffs, int cstride, const double* consts, const int32_t* cbody,
                          int kstride, double* out);
+void rodfem_scalar_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body, const uintptr_t* sums,
+                       int nx, const int32_t* xdofs, const double* x, int kstride, int nb, double* total);
+int rodfem_matrix_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                      int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                      int64_t size, const double* X,
+                      int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                      const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                      const uintptr_t* index, const uintptr_t* body,
+                      int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x, int kstride,
+                      const int8_t* bc, int nown, const int32_t* di, const int32_t* dj, double* da,
+                      const int32_t* ghost_col, int32_t* grow, int32_t* gcol, double* gval, int gcap);
+void rodfem_vector_job(int nc, const uintptr_t* cptr, const int64_t* coff, const int64_t* clen, double* consts,
+                       int no, const uintptr_t* optr, const int64_t* ooff, const int64_t* olen, double* S,
+                       int64_t size, const double* X,
+                       int ni, const int64_t* n, const uintptr_t* cells, const uintptr_t* facets,
+                       const uintptr_t* address, const uintptr_t* coeffs, const int64_t* cstride,
+                       const uintptr_t* index, const uintptr_t* body,
+                       int nd, const int32_t* dofs, int nx, const int32_t* xdofs, const double* x, int kstride,
+                       double* out);
 """
 
 def form_integrals(form):

@@ -273,15 +273,18 @@ def _pattern_key(ki, kj, src, nI, nG, method, where, postpone):
 
 class PartialLU:
     """LU of K (CSR ki, kj: interior rows 0..nI-1, interface rows nI..nI+nG-1) with the interface
-    eliminated last; `src` maps K's entries to the value arrays (D, O, G) given at `factor`."""
+    eliminated last; `src` maps K's entries to the value arrays (D, O, G) given at `factor` (None:
+    entry p of K is entry p of D)."""
 
     def __init__(self, ki, kj, nI, nG, src, nD, nO, method="rcm", where=None, postpone=None):
         self.mod = cbuild.load("rodfem_partial_lu", C_SOURCE, C_DECL)
         self.n, self.nI, self.nG = nI + nG, nI, nG
         self.ki, self.kj = np.ascontiguousarray(ki, np.int32), np.ascontiguousarray(kj, np.int32)
-        self.src, self.nD, self.nO = np.ascontiguousarray(src, np.int64), int(nD), int(nO)
+        # (src None: K's entries are D's, in order; where None: K's rows at 0..nI-1.  Digested as such)
+        self.src = np.arange(len(self.kj), dtype=np.int64) if src is None else np.ascontiguousarray(src, np.int64)
+        self.nD, self.nO = int(nD), int(nO)
         self.method = method
-        key = _pattern_key(self.ki, self.kj, self.src, nI, nG, method, where, postpone)
+        key = _pattern_key(self.ki, self.kj, src, nI, nG, method, where, postpone)
         if key in _SYMBOLIC:   # (the same pattern met before in this process: its order and factor pattern)
             self.__dict__.update(_SYMBOLIC[key])
             self._workspace()

@@ -108,6 +108,7 @@ class InterfaceSchur:
         self.fallback = None      # KSP with MUMPS on the whole matrix (a local block singular)
         self.ksp = None
         self.nG = 0
+        self._no_interface = np.zeros(0)
         self.ready = False        # set up for the current operator
         self.failed = False       # serial: no order without a zero pivot (Newton takes the next LU)
         self.times = dict.fromkeys(("extract", "zero", "lu", "restore", "Z", "S", "solve"), 0.0)
@@ -124,8 +125,14 @@ class InterfaceSchur:
     def setUp(self, pc):
         A, _ = pc.getOperators()
         self.comm = A.getComm().tompi4py()
+        nz = self._pattern_key(A)
+        if self.fallback is not None and nz != self.pattern:
+            # a new pattern (contact entries added): MUMPS afresh (MUMPS 5.7 crashes in its
+            # redistribution when a factorization is redone on a matrix whose pattern grew)
+            self.fallback.destroy()
+            self._fall_back(pc)
+            self.pattern = nz
         if self.fallback is None:
-            nz = self._pattern_key(A)
             if nz != self.pattern:
                 self._split(A)
                 self.pattern = nz
@@ -159,6 +166,16 @@ class InterfaceSchur:
             # a context made afresh by the options (Newton's settings applied again after a failed
             # step) while the chord Newton keeps its Jacobian: PETSc does not set it up again
             self.setUp(pc)
+        if self.plu is not None and self.nG == 0 and self.comm.size == 1 and self.fallback is None:
+            # one rank's partial LU: two sweeps in C, no interface (nothing to warn or reduce);
+            # a Newton step of the 3D rod applies it 8 times
+            t0, out = time.perf_counter(), x.getArray()
+            self.plu.forward(b.getArray(readonly=True))
+            self.plu.backward(self._no_interface, out)
+            self.times["solve"] += time.perf_counter() - t0
+            if not np.isfinite(out).all():
+                petsc_raw.pc_set_failed(pc)
+            return
         try:
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", LinAlgWarning)
@@ -238,6 +255,8 @@ class InterfaceSchur:
         Only the off-diagonal block (a few entries per interface) and integer passes over the
         diagonal block's column indices are needed, not the values (cost O(nnz) once per run)."""
         comm = self.comm
+        if comm.size == 1:
+            return self._split_serial(A)
         lo, hi = A.getOwnershipRange()
         n = hi - lo
         ranges = np.array(A.getOwnershipRanges())
@@ -287,6 +306,23 @@ class InterfaceSchur:
         if self.solver not in PARTIAL:
             self._make_ksp()
 
+    def _split_serial(self, A):
+        """One rank: no interface (G empty), K = A (what `_split` finds there, without its passes over
+        the entries: a third of a 16-element 3D rod's first step)."""
+        n = A.getSize()[0]
+        di, dj = petsc_raw.rowij(petsc_raw.blocks(A)[0])
+        none = np.zeros(0, PETSc.IntType)
+        self.G, self.nG = np.zeros(0, np.int64), 0
+        self.G_own, self.G_own_pos, self.R, self.ZG = none, np.zeros(0, np.int64), np.zeros(0, np.int64), none
+        self.C_all = self.C = self.rows_R = self.rows_Gown = self.cols_G = self.cols_GC = none
+        self.C_pos = np.zeros(0, np.int64)
+        self.K = self._partial_structure(n, np.zeros(n, bool), di, dj, None)
+        self.B = self.X = self.plu = None
+        self.rhs = PETSc.Vec().createSeq(n, comm=PETSc.COMM_SELF)
+        self.sol = self.rhs.duplicate()
+        if self.solver not in PARTIAL:
+            self._make_ksp()
+
     def _with_multipliers(self, A, G, lo, di, dj, orows, ocols):
         """G and the dofs with a zero diagonal (multipliers) coupled to it: a multiplier whose
         constrained dofs are all on the interface would have an empty row in A_II (singular)."""
@@ -307,9 +343,13 @@ class InterfaceSchur:
     def _partial_structure(self, n, in_G, di, dj, off):
         """K = [[A_II, A_IG], [A_GI, 0]] of this rank for rodfem/la/partial_lu.py: its CSR (rows: the
         interior in local order, then G), where each entry's value is found (src: the diagonal
-        block's values, then the off-diagonal block's, then the gathered A_GC rows), the interior."""
+        block's values, then the off-diagonal block's, then the gathered A_GC rows), the interior
+        (src and interior None: one rank, K the diagonal block itself)."""
         interior = np.flatnonzero(~in_G)
         nI, nG = len(interior), self.nG
+        if nG == 0 and off is None:   # (one rank, no interface: K is the diagonal block, in its CSR order)
+            return dict(ki=np.asarray(di, np.int64), kj=np.asarray(dj, np.int64), nI=nI, src=None, nD=len(dj),
+                        nO=0, interior=None)
         imap = np.full(n, -1, np.int64)
         imap[interior] = np.arange(nI)
         imap[self.G_own] = nI + self.G_own_pos       # owned interface columns -> their place in G
@@ -385,7 +425,8 @@ class InterfaceSchur:
                 diagonal = A.getDiagonal()   # zero on the multipliers' rows: they are eliminated late
                 self.plu = PartialLU(K["ki"], K["kj"], K["nI"], self.nG, K["src"], K["nD"], K["nO"],
                                      method=self.solver, where=K["interior"],
-                                     postpone=diagonal.array[K["interior"]] == 0)
+                                     postpone=(diagonal.array if K["interior"] is None
+                                               else diagonal.array[K["interior"]]) == 0)
                 diagonal.destroy()
             Ad, Ao, _ = petsc_raw.blocks(A, columns=False)
             values = [petsc_raw.Values(h, read=True) for h in (Ad, Ao) if h is not None]

@@ -61,6 +61,24 @@ PARALLEL = {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSch
 # full Newton.
 LARGE = 10_000
 LARGE_SETTINGS = {"snes_lag_jacobian": 5, "snes_lag_jacobian_persists": True}
+# The matrix patterns (with a zero on the diagonal) of the last KEEP Jacobians on which PETSc's LU met
+# a zero pivot in this process, and the LU Newton went on to (Newton._skip_doomed_lu).
+KEEP = 8
+_ZERO_PIVOTS = {}
+
+
+def pattern_key(A):
+    """A digest of a sequential AIJ matrix's nonzero pattern (its size and CSR structure)."""
+    import hashlib
+
+    from rodfem.fem import petsc_raw
+    i, j = petsc_raw.rowij(petsc_raw.blocks(A)[0])
+    h = hashlib.blake2b(digest_size=20)
+    h.update(i.tobytes())
+    h.update(j.tobytes())
+    return (A.getSize(), h.hexdigest())
+
+
 @dataclass
 class Solve:
     iterations: int
@@ -111,6 +129,8 @@ class Newton:
             self.settings["snes_linesearch_type"] = "basic"
         self.prefix = prefix
         self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
+        self._look_for_zero_pivots = comm.size == 1 and lu_name(self.settings) == "petsc"
+        self._pattern = None   # (its digest, when the first Jacobian has a zero on its diagonal)
         self.snes = None
         self.restart()
         self.serial = next(_COUNTER)   # the order of creation: the same on every rank
@@ -141,7 +161,34 @@ class Newton:
     def _jacobian(self, snes, xin, A, P):
         t0 = time.perf_counter()
         self.assembler.jacobian(xin, A)
+        if self._look_for_zero_pivots:
+            self._skip_doomed_lu(A)
         self.timings["J"] += time.perf_counter() - t0
+
+    def _skip_doomed_lu(self, A):
+        """The first Jacobian, serial, PETSc's LU running, a zero on the diagonal (multipliers): if
+        PETSc's LU met a zero pivot on this matrix pattern before in this process (a system built
+        again: a parameter study, a scene run again), go straight to the LU Newton went on to then,
+        before the PC is set up.  (A zero diagonal alone does not doom PETSc's LU in RCM order: the
+        four-bar's joint multipliers get their pivots from the fill.)  A failed factorization costs
+        the first step a factorization and a repeated Newton solve (issue 26: 1.4 of the 6.6 ms of
+        the 16-element 3D rod's first step)."""
+        self._look_for_zero_pivots = False
+        pc = self.snes.getKSP().getPC()   # (what runs: the user's -rodfem_pc_* options may have chosen another)
+        if pc.getType() != "lu" or pc.getFactorSolverType() != "petsc":
+            return
+        from rodfem.fem import petsc_raw
+        diagonal = A.getDiagonal()
+        try:
+            zero = not diagonal.getArray(readonly=True).all()
+        finally:
+            diagonal.destroy()
+        if not zero or not petsc_raw.usable():
+            return
+        self._pattern = pattern_key(A)
+        following = _ZERO_PIVOTS.get(self._pattern)
+        if following is not None:
+            self.use_lu(following)
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
@@ -213,6 +260,11 @@ class Newton:
                 and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
             following = next_lu(self.A, lu)
             if following is not None:
+                if lu == "petsc" and self._pattern is not None:   # (remembered for the next Newton on it)
+                    _ZERO_PIVOTS.pop(self._pattern, None)
+                    if len(_ZERO_PIVOTS) >= KEEP:
+                        _ZERO_PIVOTS.pop(next(iter(_ZERO_PIVOTS)))
+                    _ZERO_PIVOTS[self._pattern] = following
                 self.use_lu(following)
                 return self._solve(step, t)
         its = self.snes.getIterationNumber()

@@ -139,3 +139,20 @@ def test_chain_two_ranks_equal_serial():
     for x, y in zip(*outs):
         x, y = np.asarray(x), np.asarray(y)
         assert np.max(np.abs(x - y)) <= 1e-8 * max(np.max(np.abs(y)), 1e-30)
+
+
+def test_segments_copy_whichever_array_they_are_given():
+    """Segments (one C call for many arrays' values) keep their view of the last array they were
+    given: another array given next is the one read or written."""
+    from rodfem.fem.batch import Segments
+    parts = [np.zeros(3), np.zeros(2)]
+    seg = Segments(None, [0, 3], [3, 2], MPI.COMM_SELF, arrays=parts)
+    a, b = np.arange(5.0), 10 + np.arange(5.0)
+    seg.put(a)
+    seg.put(b)
+    assert np.array_equal(np.concatenate(parts), b)
+    x, y = np.zeros(5), np.zeros(5)
+    seg.get(x)
+    parts[0][:] = -1.0
+    seg.get(y)
+    assert np.array_equal(x, b) and np.array_equal(y, [-1, -1, -1, 13, 14])

@@ -3,6 +3,7 @@ DOLFINx's matrix entry for entry, keeps only the possible nonzeros where they ar
 and inserts an entry its pattern missed; the block assembly of a system (rodfem/fem/assembly.py)
 gives DOLFINx's block matrix; the linear-time collapse of a field is DOLFINx's."""
 import numpy as np
+import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 from scenes import built
@@ -28,9 +29,11 @@ def test_fast_assembly_is_dolfinx_assembly():
         assert (kept <= full / 3) if scene.endswith("3d") else (kept == full), (scene, kept, full)
 
 
-def test_fast_assembly_inserts_an_entry_outside_its_pattern():
+@pytest.mark.parametrize("batch", [False, True])
+def test_fast_assembly_inserts_an_entry_outside_its_pattern(batch):
     """An entry that is zero at the initial and the random states (a conditional that holds only
-    for w > 1e6) but not later: the pattern grows by it, and the matrix is still DOLFINx's."""
+    for w > 1e6) but not later: the pattern grows by it, and the matrix is still DOLFINx's, body by
+    body and as a batch (rodfem/fem/batch.py, whose views of the structure are made again)."""
     import ufl
     from dolfinx import fem
     from dolfinx import mesh as dmesh
@@ -47,8 +50,9 @@ def test_fast_assembly_inserts_an_entry_outside_its_pattern():
     J = compat.form(a)
     x = fem.Function(V)
     F = compat.form(sum(x[i] * v[i] for i in range(4)) * ufl.dx)
-    assembler = BlockAssembler(BlockLayout(mesh.comm, [V]), [BodyBlock(F, J, x, [])])
+    assembler = BlockAssembler(BlockLayout(mesh.comm, [V]), [BodyBlock(F, J, x, [])], batch=batch)
     assert assembler.blocks[0].fast is not None
+    assert bool(assembler.batches) == (batch and mesh.comm.size == 1)
     A = assembler.create_matrix()
     before = A.getInfo()["nz_used"]
     w.x.array[:] = 1e7

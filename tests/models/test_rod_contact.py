@@ -14,10 +14,11 @@ from processes import script_on_ranks
 
 from rodfem import Load, Support, System, ground, run
 from rodfem.analysis.statics import solve
+from rodfem.analysis.stepping import StepControl
 from rodfem.core.bodycontact import Pairing, close_pairs, segment_spheres
 from rodfem.core.components import potential
-from rodfem.demos.rod_collision import rigid, scene, straight
-from rodfem.errors import ConstraintError, InputError, ParameterError
+from rodfem.demos.rod_collision import rigid, scene, section, straight
+from rodfem.errors import ConstraintError, InputError, NewtonFailure, ParameterError
 from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import stiffness_for
 from rodfem.forms.rigid_body import PointMass
@@ -320,6 +321,33 @@ def test_self_contact_stops_a_hairpin_from_passing_through_itself():
         assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14
     free, _, _ = hairpin(contact=False)
     assert column(run(free, 4e-4, 0.08), "tip0_y").min() < 0
+
+
+# -- a step that would carry the rods through each other -------------------------------------------
+
+def test_a_step_that_would_pass_the_rods_through_each_other_is_split():
+    """Stiff rods (E = 1e9) approaching at V = 10 m/s with steps of 6 ms: one step carries them 6 cm, from
+    2.1 cm apart to the other side, with the contact at neither end, so its force is zero and without the
+    guard (`System.guard_crossing`) the rods tunnel (their momenta unchanged, no contact ever).  With it
+    the step is refused (its pairs' certified clearance (d_n + d_n+1 - s)/2 < R/2,
+    rodfem/core/bodycontact.py) and split: the rods touch and bounce (the momentum of rod a reversed,
+    its change within a quarter of the rigid-body impulse J = 2 m_eff V at these steps: measured 0.2),
+    the balance to round-off of the contact forces.  With no split allowed the refused step ends the
+    run, naming the pair."""
+    over = {"V": 10.0, "dt": 0.006, "t_end": 0.03, "E": 1e9, "n_elements": 6}
+    p = scene.values(over)
+    answer, before = rigid(p), -0.5 * section(p)[0] * p["V"]
+    free = scene.build(p, MPI.COMM_WORLD)
+    free.guard_crossing = False
+    tunnel = run(free, p["dt"], p["t_end"])
+    assert column(tunnel, "touch.N").max() == 0.0 and tunnel.stepping["rejected"] == 0
+    assert tunnel.rows[-1]["pz_a"] == pytest.approx(before, rel=1e-12)
+    guarded = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
+    assert guarded.stepping["rejected"] > 0 and guarded.stepping["substeps"] > 5
+    assert guarded.rows[-1]["pz_a"] > 0 and abs(guarded.rows[-1]["pz_a"] - answer["pz_a"]) <= 0.25 * answer["J"]
+    assert guarded.max_balance_error <= 1e-11 * column(guarded, "H").max()
+    with pytest.raises(NewtonFailure, match="may pass through each other"):
+        run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"], control=StepControl(dt_min=p["dt"]))
 
 
 # -- bad input -----------------------------------------------------------------------------------
