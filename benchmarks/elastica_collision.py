@@ -290,7 +290,7 @@ def main():
     env = dict(os.environ, PYTHONPATH="")
     if args.load:     # the sweeps of an earlier run (--save), to redo the report
         with open(args.load) as f:
-            rows, out = json.load(f)
+            rows, out, load = (json.load(f) + [None])[:3]
     else:
         rows = []
         for dt in rodfem_dts:
@@ -312,7 +312,7 @@ def main():
                   f"from PyPI in a venv of its own:\n    {INSTALL}", flush=True)
         if args.save:
             with open(args.save, "w") as f:
-                json.dump([rows, out], f)
+                json.dump([rows, out, os.getloadavg()[0]], f)
 
     # errors against each tool's reference (its smallest dt) and the other tool's
     V2 = 0.5 * SCENE["V"]
@@ -360,7 +360,7 @@ def main():
                ("dE", lambda r: fmt(r["dE"], ".1e"), "(E(end) - E(0)) / E(0)"),
                ("last_contact", lambda r: fmt(r.get("last_contact"), ".3f"), "last contact (s)"),
                ("newton", lambda r: fmt(r.get("newton"), ".2f"), "Newton its/step")]
-    load = os.getloadavg()[0]
+    load = os.getloadavg()[0] if not args.load or load is None else load
     intro = [f"Two rods crossing at right angles collide (demos/rod_collision.py: L = {SCENE['L']}, r = {SCENE['r']}, "
              f"rho = {SCENE['rho']:g}, E = {SCENE['E']:.1e}, V = {SCENE['V']} m/s), t_end = {SCENE['t_end']} s "
              f"(benchmarks/elastica_collision.py).  Rigid-body answer: v_a,z = +{V2}, v_b,z = -{V2} "
@@ -370,7 +370,7 @@ def main():
              f"element pair, nu = 0, n = {SCENE['n_elastica']}.  Errors: |v_a,z - v_a,z(ref)| / (V/2)."]
     notes = []
     for tol in args.tolerance:
-        notes.append(f"Equal accuracy, error vs own reference <= {tol:g} at this h and every smaller h of the sweep:")
+        notes += ["", f"Equal accuracy, error vs own reference <= {tol:g} at this h and every smaller h of the sweep:", ""]
         for tool in refs:
             r = chosen.get((tol, tool))
             notes.append(f"* {tool}: largest such h = {r['dt']:.3g} s, time loop {r['cpu']:.2f} CPU s, error "
@@ -384,6 +384,7 @@ def main():
                 notes.append(f"* one fresh {tool} process at that h: {q['process_cpu']:.1f} CPU s (imports, "
                              f"{'form' if key == 'rodfem' else 'numba'} compilation, run), {q['outside_wall']:.1f} "
                              f"s wall.")
+    notes.append("")
     for tool in refs:
         surv = [r for r in rows if r["tool"] == tool and r["status"] in ("converged", "stable")]
         fail = [r for r in rows if r["tool"] == tool and r not in surv]
@@ -392,7 +393,7 @@ def main():
                         if fail else " (the largest tried)."))
     notes += ["", "Reading the table:", ""]
     good = [r for r in rows if r.get("error") is not None]
-    notes.append(f"* Momentum: both tools keep the total momentum to round-off (at most "
+    notes.append(f"* Momentum: {'both tools keep' if out else 'rodfem keeps'} the total momentum to round-off (at most "
                  f"{max(r['dp'] for r in good):.0e} of m V/2).")
     rf_dE = max(abs(r["dE"]) for r in good if r["tool"] == RODFEM)
     notes.append(f"* Energy: rodfem's H after the collision equals H before to {rf_dE:.0e} at every step (the discrete "
@@ -420,6 +421,7 @@ def main():
                      "but its momentum exchange is accurate only at steps that resolve the contact's chatter "
                      "(milliseconds): above that its error is large and not monotone in h.  At equal accuracy "
                      "PyElastica is cheaper on this scene (the ratios above).")
+    notes.append("")
     if out:
         notes.append(f"PyElastica {out['version']} (numba {out['numba']}, numpy {out['numpy']}) in its own venv "
                      f"({args.elastica_python}); rodfem of this checkout, serial, one thread.")
