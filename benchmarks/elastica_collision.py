@@ -49,8 +49,8 @@ the other tool's.  Time: CPU seconds (time.process_time) of the time loop (after
 rodfem after building and form compilation), the median of three runs (rodfem below 1 ms: one run).
 Equal accuracy: for each tool the largest dt at and below which every run of the sweep is within the
 tolerance of its own reference (the error is not monotone in dt); there, one fresh process per tool:
-whole-process CPU (getrusage of it and its children: imports, numba or form compilation, the run) and
-wall seconds seen from outside.
+whole-process CPU (getrusage of it and its children: imports, numba's compilation or rodfem's forms
+from the cache of earlier runs, the run) and wall seconds seen from outside.
 """
 import argparse
 import json
@@ -382,7 +382,7 @@ def main():
             for key, tool in (("rodfem", "rodfem"), ("elastica", "PyElastica")):
                 q = process[tol, key]
                 notes.append(f"* one fresh {tool} process at that h: {q['process_cpu']:.1f} CPU s (imports, "
-                             f"{'form' if key == 'rodfem' else 'numba'} compilation, run), {q['outside_wall']:.1f} "
+                             f"{'forms from the warm cache' if key == 'rodfem' else 'numba compilation'}, run), {q['outside_wall']:.1f} "
                              f"s wall.")
     notes.append("")
     for tool in refs:
@@ -432,6 +432,8 @@ def main():
     else:
         notes.append(f"PyElastica not installed: `{INSTALL}`.")
     notes.append(f"Load average while this ran: {load:.1f} on 2 cores (the machine is shared): CPU seconds, not wall.")
+    while notes and not notes[0]:
+        notes.pop(0)
     write_report("elastica_collision", rows, columns, "Rod collision: rodfem and PyElastica over a sweep of the step",
                  intro=intro, notes=notes)
 
