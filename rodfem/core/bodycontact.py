@@ -135,14 +135,18 @@ class Centreline:
     """A flexible body's centreline nodes: the global indices of their positions q and velocities v
     (n_nodes x 3 each) and arc lengths s, sorted along the body (on every rank)."""
 
+    point = False   # a rigid body's centre: two nodes at the same place (a segment of zero length)
+
     def __init__(self, ref, layout, i):
         body = ref.body
         model = body.model
         position = getattr(model, "position", None)
         velocity = getattr(model, "kinematics", {}).get(position)
-        if body.rigid or velocity is None or tuple(body.space.field(position).shape) != (3,):
+        if body.rigid:
+            return self._centre(ref, layout, i, position, velocity)
+        if velocity is None or tuple(body.space.field(position).shape) != (3,):
             raise ConstraintError(f"contact with body {ref.name}: it must be a 3D rod or string (a centreline "
-                                  "of 3 coordinates); rigid and planar bodies are not supported")
+                                  "of 3 coordinates) or a 3D rigid body; planar bodies are not supported")
         if body.space.field(position).family != "P" or body.space.field(velocity).family != "P":
             raise ConstraintError(f"contact with body {ref.name}: its position must be a continuous (P) field")
         l2g = layout.local_to_global(i)
@@ -162,6 +166,29 @@ class Centreline:
         if len(sv) != len(s) or not np.allclose(sv, s):   # pragma: no cover - the same element for both
             raise ConstraintError(f"contact with body {ref.name}: its position and velocity nodes differ")
         self.name, self.s, self.q, self.v = ref.name, s, q, v[keep_v]
+
+    def _centre(self, ref, layout, i, position, velocity):
+        """A rigid body's position x (its sphere's centre) as the segment of zero length [x, x]: both nodes
+        have the same global indices, so the pair's forces on them add up on x's rows (and Newton's matrix
+        entries on its columns)."""
+        check_centre(ref.body, ref.name, position, velocity)
+        own = layout.sizes[i]
+        l2g = layout.local_to_global(i)
+        found = []
+        for name in (position, velocity):
+            dofs = np.asarray(ref.body.space.field_dofs(name), dtype=np.int64)
+            found.append(l2g[dofs] if len(dofs) and np.all(dofs < own) else np.zeros(0, np.int64))
+        q, v = (np.concatenate(layout.comm.allgather(f)) for f in found)
+        self.point = True
+        self.name, self.s = ref.name, np.zeros(2)
+        self.q, self.v = np.stack([q, q]), np.stack([v, v])
+
+
+def check_centre(body, name, position, velocity):
+    """Refuse a rigid body without a 3D position field (and its velocity) to carry a sphere."""
+    if position is None or velocity is None or tuple(body.space.field(position).shape) != (3,):
+        raise ConstraintError(f"contact with rigid body {name}: its model needs a position field of 3 coordinates "
+                              "(`position`, with its velocity in `kinematics`) for the sphere's centre")
 
 
 class Pairing:
@@ -200,7 +227,9 @@ class Pairing:
             return np.ones(len(pairs))
         la = np.diff(self.a.s)[pairs[:, 0]]
         lb = np.diff((self.a if self.self_contact else self.b).s)[pairs[:, 1]]
-        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)
+        wa = 1.0 if getattr(self.a, "point", False) else np.minimum(1.0, la / zone)   # (a sphere's centre: weight 1)
+        wb = 1.0 if not self.self_contact and getattr(self.b, "point", False) else np.minimum(1.0, lb / zone)
+        return wa * wb * np.ones(len(pairs))
 
     def indices(self, pairs, which):
         """Global indices (m, 4, 3) of the pairs' nodes' q or v dofs."""
