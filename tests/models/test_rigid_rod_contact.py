@@ -107,6 +107,17 @@ def test_the_step_force_on_a_sphere_does_the_energy_change_with_no_net_force_or_
     assert np.all(np.abs(np.cross(Xm, F).sum(axis=1)) <= 1e-11 * size * (1 + np.abs(Xm).max()))
 
 
+def test_a_sphere_counts_as_one_point_in_the_contact_zone_weights():
+    """With a contact zone (segments shorter than it share it), a sphere's centre (a segment of zero length)
+    weighs 1, the rod's segments min(1, l / zone), either order of the bodies."""
+    law = RodContact(1.0, 0.01, radius_b=0.05, zone=0.1)
+    rod, ball = _Line(), _Line()
+    rod.s, ball.s, ball.point = np.array([0.0, 0.05, 0.3]), np.zeros(2), True
+    pairs = np.array([[0, 0], [1, 0]])
+    assert np.allclose(Pairing(law, rod, ball, "w").weights(pairs), [0.5, 1.0])
+    assert np.allclose(Pairing(law, ball, rod, "w").weights(pairs[:, ::-1]), [0.5, 1.0])
+
+
 # -- a heavy ball at rest on a clamped-clamped beam and on a taut string (statics) ----------------------
 
 def hold_sideways(s, ball, at, ks=1e2):
