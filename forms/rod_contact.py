@@ -49,6 +49,17 @@ What the discretization is and is not:
   (by default pi r: a rod bent back on itself with the tightest radius its section allows, r,
   touches itself at arc distance pi r) are left out, the neighbours always.
 
+A rigid body's sphere (`System.contact(law, rod, ball)`, either order): the sphere of radius R_s (the
+law's radius on the rigid body's side) about the body's position x is the segment of zero length
+[x, x], so that for each segment of the rod
+
+    d_j = min over b in [0, 1] of |x - y(b)|,        g_j = d_j - (R_s + r_rod),
+
+the distance of the centre to the segment (`closest_points` takes the point's own branch: the clamped
+projection), and the same energy V = sum_j w_j psi(g_j) (the point's weight 1).  The force -psi'(g) n
+acts at the centre (on x) and at the rod's closest point: it has no moment about x, so it does not turn
+the rigid body (the sphere is frictionless and its rotation plays no part in the gap).
+
 Friction (`friction=Coulomb(mu_s, mu_k, eps, v_s)`, forms/contact.py's regularized Coulomb law, the same
 object as an obstacle's): at each segment pair in contact, with the closest points' parameters a, b and
 the normal n of the midpoint state X_m, the slip is the tangential part of the closest points' relative

@@ -6,6 +6,14 @@ bodies a and b (b None: self-contact of a).  The law gives, for segment pairs of
 reach R (the distance at which the tubes touch), the energy psi(d, R) and its difference quotient
 z = [psi(d_{n+1}) - psi(d_n)] / (d_{n+1} - d_n) (`quotient`).
 
+One of the two bodies may be rigid (a 3D rigid body: a sphere about its position): its position x is a
+centreline of two nodes at the same place, [x, x], with the same global indices (`Centreline.point`),
+so everything below holds for it unchanged: the pair's 4 nodes are x_i, x_{i+1}, x, x; the forces on
+the two copies add up on x's rows and Newton's columns of both on x's columns (PETSc adds repeated
+indices); the rigid projection treats x as a node (twice: the rigid motions move both copies alike,
+so P dX is the same on both and D . dX = d_{n+1} - d_n still holds with the work z D . dX done on x
+once per copy).  The rigid body's rotation gets no force: the sphere's contact acts through its centre.
+
 The step's force on the 4 nodes X = (x_i, x_{i+1}, y_j, y_{j+1}) of a segment pair is z D, with D a
 discrete gradient of the distance that also keeps the momenta:
 

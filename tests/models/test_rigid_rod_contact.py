@@ -8,10 +8,12 @@ balance to round-off, the rod's and the ball's momenta after the impact against 
 for equal and unequal masses; off-centre the rod spins and the total angular momentum stays); bad input;
 mpirun -n 2 = serial."""
 
+import os
+
 import numpy as np
 import pytest
-from mpi4py import MPI
 from processes import script_on_ranks
+from scipy.optimize import brentq
 
 from rodfem import Load, Support, System, ground, run
 from rodfem.analysis.statics import solve
@@ -24,7 +26,7 @@ from rodfem.forms.contact import stiffness_for
 from rodfem.forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
 from rodfem.forms.rod_contact import RodContact, closest_points
 from rodfem.forms.string import String
-from rodfem.forms.string_materials import logarithmic
+from rodfem.forms.string_materials import biot
 
 
 def column(result, name):
@@ -189,8 +191,6 @@ def test_ball_resting_on_a_taut_string_sags_it_as_the_exact_string(R_s):
     (R = r + R_s), on a segment whose far node takes that share of the load, which lifts the kink by
     2 R sin(theta) / span of the sag on a string (a mesh much finer than R theta would wrap the ball):
     the error is below that and shrinks with R (measured 1.18e-3 and 1.8e-4 of the sag)."""
-    from scipy.optimize import brentq
-    from rodfem.forms.string_materials import biot
     L0, stretch, EA, r, M, g = 1.0, 1.01, 1000.0, 0.002, 0.4 / 9.81, 9.81
     P = M * g
     s = System(integrator="discrete-gradient")
@@ -212,7 +212,6 @@ def test_ball_resting_on_a_taut_string_sags_it_as_the_exact_string(R_s):
     sag = (r + R_s - obs["rest.penetration"]) / np.cos(theta) - obs["ball_z"]
     exact = half * np.tan(theta)
     groove = 2 * (r + R_s) * np.sin(theta) / (stretch * L0)
-    print("string", R_s, sag / exact - 1, groove, exact / (P * stretch * L0 / (4 * EA * (stretch - 1))) - 1, obs["rest.active"])
     assert obs["rest.active"] == 2
     assert -groove <= sag / exact - 1 < 0
 
@@ -276,7 +275,7 @@ def test_ball_hitting_a_stiff_rod_at_its_centre(mass_ratio):
     """Head-on at the rod's centre: the total momentum stays to round-off, H (with the contact energy) is
     constant to round-off, and the momenta after the impact follow the rigid-body law (equal masses: the
     velocities are exchanged; a ball of half the rod's mass: it bounces back at V/3, the rod leaves at 2V/3)
-    within 1e-3 of J for a stiff rod (E = 1e10)."""
+    within 1e-4 of J for a stiff rod (E = 1e10; measured 2.1e-5 and 1.4e-5: the rod's vibration)."""
     result, answer = impact(mass_ratio, 0.0, 1e10)
     last = result.rows[-1]
     assert column(result, "hit.N").max() > 0 and last["hit.N"] == 0.0
@@ -284,9 +283,7 @@ def test_ball_hitting_a_stiff_rod_at_its_centre(mass_ratio):
         assert np.abs(column(result, k) - result.rows[0][k]).max() <= 1e-14 * answer["scale"], k
     assert result.max_balance_error <= 1e-12 * column(result, "H").max()
     error = max(abs(last[k] - answer[k]) / answer["J"] for k in ("pz_ball", "pz_rod"))
-    print("centre", mass_ratio, error, result.max_balance_error / column(result, "H").max(),
-          max(np.abs(column(result, k) - result.rows[0][k]).max() / answer["scale"] for k in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z")))
-    assert error <= 1e-3
+    assert error <= 1e-4
 
 
 def test_ball_hitting_a_rod_off_centre_spins_it():
@@ -294,8 +291,8 @@ def test_ball_hitting_a_rod_off_centre_spins_it():
     spins up; the total linear and angular momentum about the origin stay to round-off, the balance holds
     to round-off, the ball's own spin (L - x x p) is untouched (the sphere's force acts through its centre:
     no couple, to round-off), and the rod's p_z and L_y and the ball's p_z after the impact approach the
-    rigid-body law as the rod stiffens: within 2e-2 of J at E = 1e9, within 1e-3 at E = 1e10, the error at
-    least 10 times smaller."""
+    rigid-body law as the rod stiffens: within 1e-2 of J at E = 1e9, within 3e-4 at E = 1e10 (measured
+    3.0e-3 and 8.5e-5), the error at least 10 times smaller."""
     errors = []
     for E in (1e9, 1e10):
         result, answer = impact(0.7, 0.1, E, spin=(3.0, -2.0, 5.0))
@@ -307,10 +304,7 @@ def test_ball_hitting_a_rod_off_centre_spins_it():
         assert np.abs(spin_of(last) - spin_of(first)).max() <= 1e-14 * answer["scale"]
         assert abs(last["Ly_rod"]) > 0.05 * answer["J"]
         errors.append(max(abs(last[k] - answer[k]) / answer["J"] for k in ("pz_ball", "pz_rod", "Ly_rod")))
-        print("off", E, errors[-1], np.abs(spin_of(last) - spin_of(first)).max() / answer["scale"],
-              result.max_balance_error / column(result, "H").max(),
-              max(np.abs(column(result, k) - first[k]).max() / answer["scale"] for k in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z")))
-    assert errors[0] <= 2e-2 and errors[1] <= 1e-3 and errors[1] <= errors[0] / 10
+    assert errors[0] <= 1e-2 and errors[1] <= 3e-4 and errors[1] <= errors[0] / 10
 
 
 # -- bad input -----------------------------------------------------------------------------------
@@ -350,7 +344,6 @@ SCRIPT = """
 import json
 import sys
 import numpy as np
-from mpi4py import MPI
 sys.path[:0] = [{here!r}, {tests!r}]
 from test_rigid_rod_contact import impact
 result, answer = impact(0.7, 0.1, 1e8, n=6, t_end=0.03)
@@ -364,9 +357,8 @@ def test_ball_on_rod_in_parallel_equals_serial():
     """The off-centre impact (6 elements over 2 ranks, the ball's cell on one of them: its position gathered
     on rank 0 with the rod's nodes) under mpirun -n 2 writes the serial history; the contact is on at the
     end."""
-    import os
-    serial, parallel = script_on_ranks(SCRIPT.format(here=os.path.dirname(os.path.abspath(__file__)),
-                                                          tests=os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), timeout=600)
+    here = os.path.dirname(os.path.abspath(__file__))
+    serial, parallel = script_on_ranks(SCRIPT.format(here=here, tests=os.path.dirname(here)), timeout=600)
     assert serial["hit.N"] > 0
     assert serial.keys() == parallel.keys()
     for key, value in serial.items():
