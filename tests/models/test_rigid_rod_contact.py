@@ -364,3 +364,24 @@ def test_ball_on_rod_in_parallel_equals_serial():
     for key, value in serial.items():
         if key != "wall_time":
             assert parallel[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+
+
+# -- the scene -------------------------------------------------------------------------------------
+
+def test_ball_dropped_on_a_string_keeps_the_balance():
+    """The ball-on-string scene (8 elements, to t = 0.12: the ball lands and is caught): the balance
+    H_{n+1} - H_n = supplied (gravity's work) to round-off through the landing, the contact force on the
+    string only along -z at the symmetric landing, and the ball held above the string's centre line by less
+    than the rest state's sag plus its landing overshoot (not through the string)."""
+    from mpi4py import MPI
+
+    from rodfem.demos.ball_on_string import rest, scene
+    p = scene.values({"t_end": 0.12, "n_elements": 8})
+    result = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
+    N = column(result, "hit.N")
+    assert N.max() > p["M"] * p["g"]
+    assert result.max_balance_error <= 1e-12 * np.abs(column(result, "H")).max()
+    assert np.abs(column(result, "hit.Fn_x")).max() <= 1e-12 * N.max()
+    theta, sag, z_rest = rest(p)
+    assert result.rows[-1]["z_rest"] == z_rest and 0 < z_rest < p["R_s"] + p["r"]
+    assert column(result, "ball_z").min() > -3 * sag
