@@ -19,7 +19,7 @@ from rodfem import Load, Support, System, ground, run
 from rodfem.analysis.statics import solve
 from rodfem.core.bodycontact import Pairing
 from rodfem.core.components import potential
-from rodfem.errors import ConstraintError
+from rodfem.errors import ConstraintError, ParameterError
 from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import stiffness_for
@@ -375,7 +375,12 @@ def test_ball_dropped_on_a_string_keeps_the_balance():
     than the rest state's sag plus its landing overshoot (not through the string)."""
     from mpi4py import MPI
 
-    from rodfem.demos.ball_on_string import rest, scene
+    from rodfem.app.scene import load, scenes
+    from rodfem.demos.ball_on_string import rest
+    assert "ball-on-string" in scenes()
+    scene = load("ball-on-string")
+    with pytest.raises(ParameterError, match="stretch"):
+        scene.values({"stretch": 0.99})
     p = scene.values({"t_end": 0.12, "n_elements": 8})
     result = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
     N = column(result, "hit.N")
