@@ -344,6 +344,7 @@ SCRIPT = """
 import json
 import sys
 import numpy as np
+from mpi4py import MPI
 sys.path[:0] = [{here!r}, {tests!r}]
 from test_rigid_rod_contact import impact
 result, answer = impact(0.7, 0.1, 1e8, n=6, t_end=0.03)
