@@ -307,6 +307,25 @@ def test_ball_hitting_a_rod_off_centre_spins_it():
     assert errors[0] <= 1e-2 and errors[1] <= 3e-4 and errors[1] <= errors[0] / 10
 
 
+def test_ball_hitting_a_free_string_keeps_momentum_and_energy():
+    """A ball (M = 0.05, R_s = 0.02) hits a free string (no supports; EA = 50, rhoA = 0.3, r = 0.005, 10 P1
+    elements) 0.13 off its centre and between two nodes, obliquely: they touch and part with the total linear
+    and angular momentum constant to 1e-14 of M V L and H (with the contact energy) constant to 1e-12."""
+    rhoA, V, r, R_s, M, L = 0.3, 0.5, 0.005, 0.02, 0.05, 0.5
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
+    string = s.add("string", String(biot(EA=50.0), rhoA), L, 10,
+                   initial={"r": lambda x: np.vstack([x[0] - 0.5 * L, 0 * x[0], 0 * x[0]]),
+                            "v": lambda x: np.zeros((3, x.shape[1]))})
+    ball = s.add("ball", PointMass(M), initial=PointMass.initial((0.13, 0.004, r + R_s + 2e-3), (0.1, 0.05, -V)))
+    m_eff = 1 / (1 / M + 1 / (rhoA * 0.05))
+    s.contact(RodContact(1.5 * m_eff * V**2 / 1e-3**3, r, radius_b=R_s), ball, string, name="hit")
+    result = run(s, 2e-4, 0.03)
+    assert column(result, "hit.N").max() > 0 and result.rows[-1]["hit.N"] == 0.0
+    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+    for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * M * V * L, key
+
+
 # -- bad input -----------------------------------------------------------------------------------
 
 def test_bad_input_is_refused_in_one_line():
