@@ -1,6 +1,7 @@
 """Many bodies on two ranks: the chain of bench_many_bodies.py serial and under `mpirun -n 2` (issue 26).
 
     .venv/bin/python benchmarks/bench_bodies_ranks.py [--runs 3] [--bodies 16 64 256] [--steps 20]
+                                                    [--before CHECKOUT]
                                                     # -> the "ranks" section of benchmarks/many_bodies.md
                                                     #    and benchmarks/many_bodies_ranks.csv
 
@@ -13,6 +14,16 @@ two ranks in turn (A B A B ...: a shared machine's load drifts); per step: the w
 after the first (the first sets up the solver), measured in the process; the last column, the largest
 difference of the two runs' histories (every column, relative to the largest value of its kind: the
 multipliers to the largest multiplier; the joints' position residual |g| to the chain's length).
+
+The machine is shared (2 cores, other developers' jobs beside these), so each run also gives each
+rank's CPU seconds of those steps (time.process_time: the rank's own work, and its busy waits in MPI
+calls, which Open MPI spends polling) and the load average before and after it.  Two ranks are run
+twice: as Open MPI starts them by default (each rank bound to a core of its own, polling while it
+waits), and with `--bind-to none` and `OMPI_MCA_mpi_yield_when_idle=1` (a rank runs on whichever core
+is free, and one that waits gives its core away: on a loaded machine the other rank, or another job,
+runs meanwhile).
+`--before CHECKOUT`: the same runs of another checkout (e.g. `git archive main | tar -x -C /tmp/before`),
+side by side.
 """
 import argparse
 import json
@@ -39,30 +50,38 @@ s = chain(N, distribute=True)
 s.build()
 t1 = time.perf_counter()
 first = run(s, 1e-3, 1e-3)
-t2 = time.perf_counter()
+t2, c2 = time.perf_counter(), time.process_time()
 rest = run(s, 1e-3, steps * 1e-3)   # (steps 2 .. steps: continues from the first)
-t3 = time.perf_counter()
+t3, c3 = time.perf_counter(), time.process_time()
+cpu = MPI.COMM_WORLD.gather(1e3 * (c3 - c2) / (steps - 1), root=0)
 if MPI.COMM_WORLD.rank == 0:
     rows = first.rows + rest.rows[1:]
     cols = {{k: [r[k] for r in rows] for k in rows[0] if isinstance(rows[0][k], float) and k != "wall_time"}}
     json.dump(dict(build_s=t1 - t0, first_step_s=t2 - t1, ms_per_step=1e3 * (t3 - t2) / (steps - 1),
-                   placed=bool(s.distributed), history=cols), open(out, "w"))
+                   cpu_ms_per_step=cpu, placed=bool(s.distributed), history=cols), open(out, "w"))
 """
 
 
-def once(N, steps, ranks):
-    """(whole-process wall seconds, the child's figures) of one run."""
+def once(N, steps, ranks, root=ROOT, polite=False):
+    """(whole-process wall seconds, the child's figures, load averages before and after) of one run of
+    the checkout `root`; `polite`: Open MPI's ranks unbound, yielding their core while they wait."""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.json")
-        cmd = [sys.executable, "-c", CHILD.format(here=HERE, N=N, steps=steps, out=out)]
+        here = os.path.join(root, "benchmarks") if os.path.exists(os.path.join(root, "benchmarks", "bench_many_bodies.py")) else HERE
+        cmd = [sys.executable, "-c", CHILD.format(here=here, N=N, steps=steps, out=out)]
         if ranks > 1:
-            cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks)] + cmd
-        env = dict(os.environ, PYTHONPATH=ROOT, OMP_NUM_THREADS="1")
+            cmd = ([shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", str(ranks)]
+                   + (["--bind-to", "none"] if polite else []) + cmd)
+        env = dict(os.environ, PYTHONPATH=root, OMP_NUM_THREADS="1")
+        env.pop("OMPI_MCA_mpi_yield_when_idle", None)
+        if polite:
+            env["OMPI_MCA_mpi_yield_when_idle"] = "1"
+        load = os.getloadavg()[0]
         t = time.perf_counter()
-        subprocess.run(cmd, env=env, cwd=ROOT, check=True, capture_output=True, timeout=1800)
+        subprocess.run(cmd, env=env, cwd=root, check=True, capture_output=True, timeout=1800)
         wall = time.perf_counter() - t
         with open(out) as f:
-            return wall, json.load(f)
+            return wall, json.load(f), (load, os.getloadavg()[0])
 
 
 def difference(a, b):
@@ -78,25 +97,28 @@ def difference(a, b):
     return max(max(abs(u - v) for u, v in zip(x, b[k])) / max(scale[kind(k)], 1e-300) for k, x in a.items())
 
 
+VARIANTS = (("serial", 1, False), ("2 ranks", 2, False), ("2 ranks, unbound, yield", 2, True))
+
+
 def section(rows, runs, steps):
     from report import table
-    load = os.getloadavg()[0]
-    columns = [("bodies", "{}"),
-               ("serial_s", "{:.2f}", "serial: whole process s"), ("ranks_s", "{:.2f}", "2 ranks: whole process s"),
-               ("speedup", "{:.2f}", "whole process: serial / 2 ranks"),
-               ("serial_ms", "{:.2f}", "serial ms/step"), ("ranks_ms", "{:.2f}", "2 ranks ms/step"),
-               ("step_speedup", "{:.2f}", "per step: serial / 2 ranks"),
-               ("serial_build", "{:.2f}", "serial build s"), ("ranks_build", "{:.2f}", "2 ranks build s"),
-               ("diff", "{:.1e}", "histories differ by")]
+    columns = [("bodies", "{}"), ("checkout", "{}"), ("run", "{}"),
+               ("whole_s", "{:.2f}", "whole process s"), ("whole_speedup", "{:.2f}", "whole: serial / this"),
+               ("ms", "{:.2f}", "ms/step (wall)"), ("ms_best", "{:.2f}", "best ms/step"),
+               ("step_speedup", "{:.2f}", "per step: serial / this"),
+               ("cpu", "{}", "CPU ms/step per rank"), ("build", "{:.2f}", "build s"),
+               ("load", "{}", "load before / after"), ("diff", "{:.1e}", "histories differ from serial by")]
     return ["<!-- ranks: written by benchmarks/bench_bodies_ranks.py -->", "",
             "## Many bodies on two ranks (`System(distribute=True)`, `mpirun -n 2`)", "",
             f"The chain of N beams (128 elements in total), {steps} steps of h = 1 ms; each beam built whole on one "
             "rank (rodfem/core/placement.py).  Whole process: wall seconds from the command's start to its end "
-            f"(imports, build, run), the median of {runs} runs, serial and two ranks in turn; ms/step: wall time "
-            "of the steps after the first, in the process; build: wall seconds of the build in the process.", "",
+            f"(imports, build, run), the median of {runs} runs, the variants in turn; ms/step: wall time of the "
+            "steps after the first, in the process (median, and the best run); CPU ms/step per rank: "
+            "time.process_time of those steps on each rank (median; Open MPI's busy waits count as CPU time); "
+            "unbound, yield: `mpirun --bind-to none` with `OMPI_MCA_mpi_yield_when_idle=1`; load: the 1-minute load average before and after "
+            "the run (medians) on this 2-core machine, shared with other developers' jobs.  before: main "
+            "before this work; now: this checkout.", "",
             *table(rows, columns), "",
-            f"Load average while this ran: {load:.1f} on 2 cores (a shared machine: other developers' jobs run "
-            "beside these; two ranks need both cores at once, so their figures suffer more from the load).", "",
             "<!-- /ranks -->"]
 
 
@@ -117,28 +139,38 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--bodies", type=int, nargs="+", default=[16, 64, 256])
+    ap.add_argument("--before", help="another checkout, run side by side (e.g. main before this work)")
+    ap.add_argument("--no-write", action="store_true", help="print the table only")
     args = ap.parse_args()
     from report import write_csv
+    checkouts = [("now", ROOT)] + ([("before", os.path.abspath(args.before))] if args.before else [])
     rows = []
+    med = statistics.median
     for N in args.bodies:
-        serial, ranks = [], []
+        runs = {}
         for _ in range(args.runs):   # (in turn: the load drifts)
-            serial.append(once(N, args.steps, 1))
-            ranks.append(once(N, args.steps, 2))
-        assert all(r[1]["placed"] for r in ranks)
-        med = lambda runs, k: statistics.median(r[1][k] for r in runs)   # noqa: E731
-        row = dict(bodies=N, serial_s=statistics.median(r[0] for r in serial),
-                   ranks_s=statistics.median(r[0] for r in ranks),
-                   serial_ms=med(serial, "ms_per_step"), ranks_ms=med(ranks, "ms_per_step"),
-                   serial_build=med(serial, "build_s"), ranks_build=med(ranks, "build_s"),
-                   diff=max(difference(a[1]["history"], b[1]["history"]) for a, b in zip(serial, ranks)))
-        row["speedup"] = row["serial_s"] / row["ranks_s"]
-        row["step_speedup"] = row["serial_ms"] / row["ranks_ms"]
-        print(row, flush=True)
-        rows.append(row)
-    write_csv("many_bodies_ranks", rows)
+            for name, root in checkouts:
+                for run, ranks, polite in VARIANTS:
+                    runs.setdefault((name, run), []).append(once(N, args.steps, ranks, root, polite))
+        for name, _ in checkouts:
+            serial = runs[(name, "serial")]
+            for run, ranks, _ in VARIANTS:
+                got = runs[(name, run)]
+                assert ranks == 1 or all(r[1]["placed"] for r in got)
+                cpu = [med(r[1]["cpu_ms_per_step"][k] for r in got) for k in range(ranks)]
+                row = dict(bodies=N, checkout=name, run=run, whole_s=med(r[0] for r in got),
+                           ms=med(r[1]["ms_per_step"] for r in got), ms_best=min(r[1]["ms_per_step"] for r in got),
+                           cpu=" / ".join(f"{c:.2f}" for c in cpu), build=med(r[1]["build_s"] for r in got),
+                           load=f"{med(r[2][0] for r in got):.1f} / {med(r[2][1] for r in got):.1f}",
+                           diff=max(difference(a[1]["history"], b[1]["history"]) for a, b in zip(serial, got)))
+                row["whole_speedup"] = med(r[0] for r in serial) / row["whole_s"]
+                row["step_speedup"] = med(r[1]["ms_per_step"] for r in serial) / row["ms"]
+                print(row, flush=True)
+                rows.append(row)
     lines = section(rows, args.runs, args.steps)
-    write_section(lines)
+    if not args.no_write:
+        write_csv("many_bodies_ranks", rows)
+        write_section(lines)
     print("\n".join(lines))
 
 

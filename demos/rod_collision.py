@@ -28,12 +28,14 @@
 # ## Friction (`mu` > 0, forms/rod_contact.py)
 #
 # With `mu` the rods rub: regularized Coulomb friction (forms/contact.py's `Coulomb`, mu_s = mu_k = mu)
-# between the closest points, against their relative slip; `slide` gives them a relative velocity along
-# x (along rod a, across rod b).  The friction forces are equal and opposite: the total linear momentum
-# stays constant to round-off; the friction's work is the column `dissipated` (H - supplied +
-# dissipated constant to round-off); the total angular momentum changes by the moment of the
-# force couples, h touch.Mf per step (the friction acts at the tubes' surfaces, the centrelines carry
-# it a distance R apart).  The *_rigid columns stay the frictionless answer.
+# at the tubes' contact point, against the relative slip of the two rods' material points there;
+# `slide` gives them a relative velocity along x (along rod a, across rod b).  The friction acts on each
+# rod as a force at its centreline and a couple on its cross-section (the arm from the centreline to the
+# contact point): rod b, rubbed across its axis, spins up.  The forces are equal and opposite and the
+# force-couple pairs have no net moment, so the total linear AND angular momentum stay constant to
+# round-off (touch.Mf, the friction's net moment, is zero to round-off); the friction's work is the
+# column `dissipated` (H - supplied + dissipated constant to round-off).  The *_rigid columns stay the
+# frictionless answer.
 #
 # ## The rigid-body answer (frictionless, elastic)
 #
@@ -174,8 +176,9 @@ scene = Scene("rod-collision", "two elastic rods crossing at right angles collid
               "contact): momentum and energy exact, stiff rods against the rigid-body impulse law",
               parameters, build,
               notes="Total p, L constant to round-off; discrete gradient: H constant to round-off; pz_a, pz_b, "
-                    "Ly_a, Lx_b approach their *_rigid columns as E grows.  With mu > 0: p constant, L changes "
-                    "by h touch.Mf per step, H - supplied + dissipated constant to round-off.")
+                    "Ly_a, Lx_b approach their *_rigid columns as E grows.  With mu > 0: p and L constant to "
+                    "round-off (touch.Mf = 0: the friction's forces and section couples balance), rod b spins "
+                    "up, H - supplied + dissipated constant to round-off.")
 
 if __name__ == "__main__":
     sys.exit(main(["run", scene.name, *sys.argv[1:]]))

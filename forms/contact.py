@@ -79,10 +79,12 @@ booked in `dissipated` (h d_n >= 0 every step, exactly what the force takes out)
 of a body with a cross-section is the surface point x - r n: its velocity is v - r sum_{i=2,3}
 (n . d_i) w_i for a rod with directors (the material point of the section circle in the plane of
 d2, d3 facing the obstacle), v - r omega (-n_y, n_x) for a planar beam, v for a string or a point.
-The friction of a rolling rod thus acts on its spin as well.
+The friction of a rolling rod thus acts on its spin as well (`section_point_velocity`: the force at
+the section point x + sum_k beta_k d_k is the force f on the centreline and the couple
+(sum_k beta_k d_k) x f on the section).
 
-Rod-rod and self-contact (forms/rod_contact.py) take the same law between the closest points of two
-segments.  Not here: moving
+Rod-rod and self-contact (forms/rod_contact.py) take the same law and the same section kinematics at
+the contact point of two segments' tubes.  Not here: moving
 obstacles, the exact (non-regularized) Coulomb law, rolling resistance, contact in statics.
 """
 from dataclasses import dataclass
@@ -244,6 +246,35 @@ class Cylinder:
         return f"cylinder axis {np.round(self.a, 6).tolist()} through {self.p.tolist()} radius {self.R:g}"
 
 
+# -- the section's kinematics: where friction acts on a body with a cross-section -------------------
+
+DIRECTORS, RATES = ("d1", "d2", "d3"), ("w1", "w2", "w3")   # a director section and its rates w_k = d_t d_k
+
+
+def section_kind(names, dim=3):
+    """How a body's cross-section moves, from its fields' names: 'directors' (d1, d2, d3 and their rates
+    w1, w2, w3: a 3D Cosserat rod), 'planar' (phi, omega of a planar beam, dim 2) or None (a string, a
+    point: no section, friction acts at the centreline)."""
+    names = set(names)
+    if {*DIRECTORS, *RATES} <= names:
+        return "directors"
+    if {"phi", "omega"} <= names and dim == 2:
+        return "planar"
+    return None
+
+
+def section_point_velocity(v, beta, rates):
+    """The velocity v + sum_k beta_k w_k of the section's material point x + sum_k beta_k d_k (its
+    coordinates beta_k in the director frame, the rates w_k = d_t d_k): v + omega x (sum_k beta_k d_k) for
+    a rigid motion of the section (w_k = omega x d_k).  Linear in (v, w): with test functions in their
+    place it is the virtual velocity, so a force f at the point acts on the centreline as f and on the
+    section as the couple (sum_k beta_k d_k) x f.  UFL (beta, rates: sequences over k) or numpy (beta
+    (m, K), rates (m, K, 3): m points at once, forms/rod_contact.py)."""
+    if isinstance(beta, np.ndarray):
+        return v + np.einsum("mk,mkj->mj", beta, rates)
+    return v + sum(b * w for b, w in zip(beta, rates))
+
+
 # -- friction ------------------------------------------------------------------------------------
 
 @dataclass
@@ -316,13 +347,7 @@ class Contact:
         if self.dim != self.obstacle.dim:
             raise InputError(f"contact {self.name}: the body is {self.dim}D, the obstacle ({self.obstacle.describe()}) "
                              f"{self.obstacle.dim}D")
-        names = set(space.names)
-        if {"d2", "d3", "w2", "w3"} <= names:
-            self.section = "directors"
-        elif {"phi", "omega"} <= names and self.dim == 2:
-            self.section = "planar"
-        else:
-            self.section = None
+        self.section = section_kind(space.names, self.dim)
         if field.family == "P":   # Gauss-Lobatto: the points are the nodes of P1 and P2
             self.dc = ufl.Measure("dx", domain=mesh, metadata={"quadrature_rule": "GLL",
                                                                "quadrature_degree": max(2 * field.degree - 1, 1)})
@@ -356,8 +381,8 @@ class Contact:
         test functions) and the configuration x (dict) -- linear in w."""
         v = w[self.velocity]
         r = self.c["r"]
-        if self.section == "directors":
-            return v - r * sum(ufl.inner(n, x[d]) * w[wi] for d, wi in (("d2", "w2"), ("d3", "w3")))
+        if self.section == "directors":   # the section point -r (n.d2) d2 - r (n.d3) d3
+            return section_point_velocity(v, [-r * ufl.inner(n, x[d]) for d in DIRECTORS[1:]], [w[wi] for wi in RATES[1:]])
         if self.section == "planar":
             return v - r * w["omega"] * ufl.as_vector([-n[1], n[0]])
         return v

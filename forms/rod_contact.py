@@ -58,28 +58,44 @@ law's radius on the rigid body's side) about the body's position x is the segmen
 the distance of the centre to the segment (`closest_points` takes the point's own branch: the clamped
 projection), and the same energy V = sum_j w_j psi(g_j) (the point's weight 1).  The force -psi'(g) n
 acts at the centre (on x) and at the rod's closest point: it has no moment about x, so it does not turn
-the rigid body (the sphere is frictionless and its rotation plays no part in the gap).
+the rigid body (its rotation plays no part in the gap).  With friction the sphere is a side without a
+section, as a string (below): the friction acts at its centre, and the couple of its arm is not applied
+to the rigid body's rotation (it shows in name.Mf).
 
 Friction (`friction=Coulomb(mu_s, mu_k, eps, v_s)`, forms/contact.py's regularized Coulomb law, the same
-object as an obstacle's): at each segment pair in contact, with the closest points' parameters a, b and
-the normal n of the midpoint state X_m, the slip is the tangential part of the closest points' relative
-velocity at the step's midpoint
+object as an obstacle's) acts at the CONTACT POINT of the two tubes.  With the closest points x_c, y_c
+(parameters a, b), their distance d and the normal n (from y_c to x_c) of the midpoint state X_m, the
+contact point c = x_c - rho_a n = y_c + rho_b n divides x_c - y_c in the ratio of the radii,
 
-    v_t = (I - n n^T) [(1 - a) v_i + a v_{i+1} - (1 - b) v_j - b v_{j+1}]_m,
+    rho_a = r_A d / R,   rho_b = r_B d / R        (`arms`; the tubes' surfaces when d = R),
 
-and the friction force on body a's closest point is f = -mu(|v_t|) N v_t / sqrt(|v_t|^2 + eps^2), with
-the pair's normal force of the step N = -w z >= 0 (z the penalty's difference quotient, w the pair's
-weight); -f acts on body b's.  The forces go to the segments' nodes as (1 - a, a) f and -(1 - b, b) f:
-they sum to zero (linear momentum exact), and their work in the step is
+so it is one point of both bodies at any penetration.  On a body with a director section (a 3D rod) c is
+the material point x_c + u of the section, u = -rho_a n (body b: +rho_b n), with the coordinates beta
+(sum_k beta_k d_k(a) = u, `section_coordinates`) in the section frame d_k(a) interpolated at the
+closest point from the nodes' midpoint directors.  The point's velocity is forms/contact.py's
+`section_point_velocity`, the obstacle friction's: v(a) + sum_k beta_k w_k(a) (v + omega x u for a
+rigid section motion).  A body without a section (a string) has u = 0: its point is x_c.  The slip is
+the tangential part of the relative velocity of the two bodies' points at the step's midpoint,
 
-    h f . v_t <= 0,
+    v_t = (I - n n^T) [v_c,a - v_c,b],    v_c = sum_nodes s_i (v_i + sum_k beta_k w_k,i),  s = (1 - a, a) resp. (1 - b, b),
 
-booked in `dissipated` (the balance H_{n+1} - H_n + dissipated = supplied stays exact).  The two
-closest points are d = |x_c - y_c| apart along n while f is tangential: the pair of forces has the
-moment (x_c - y_c) x f = d n x f (|.| <= R mu_s N), the moment about the centrelines of the friction
-acting at the tubes' surfaces, which a rod with rotating sections would take as spin.  The centreline
-contact does not apply it to the sections, so the total angular momentum changes by exactly
-h sum (x_c - y_c)_m x f per step (name.Mf_x, _y, _z: that moment), a bound of R mu_s N per unit time.
+and the friction force on body a's point is f = -mu(|v_t|) N v_t / sqrt(|v_t|^2 + eps^2), with the
+pair's normal force of the step N = -w z >= 0 (z the penalty's difference quotient, w the pair's
+weight); -f acts on body b's.  Tested with the virtual velocity of the point, f goes to the segment's
+position rows as s_i f and to its director rows as s_i beta_k f: the force f at x_c and the couple
+u x f on the section.  So
+
+* linear momentum: the forces sum to zero;
+* angular momentum: the discrete moment of a node's loads is x_m x F + sum_k d_k,m x G_k (the
+  rows tested with the rotation theta x x_m, theta x d_k,m), which for a pair is
+  (x_c + u_a) x f - (y_c + u_b) x f = (c - c) x f = 0: exact (that is why beta solves the frame,
+  which is not orthonormal at the midpoint and between nodes, instead of taking D^T u).  Against a
+  string only the rod's couple acts: the pair's moment is then rho_s n x f (name.Mf; rho_s the
+  string's share of d, f the force on body a);
+* energy: the work of the step, tested with the midpoint velocities, is h f . v_t <= 0, booked in
+  `dissipated` (H_{n+1} - H_n + dissipated = supplied stays exact);
+* a rod sliding across another picks up spin until the points roll on each other (v_t -> 0).
+
 It is not a regularization of the set-valued law that sticks exactly: see forms/contact.py for the
 creep at eps and the time step the stiff damper wants.
 
@@ -91,7 +107,7 @@ there.  Strings use the same code (their radius: the tube about the centreline).
 import numpy as np
 
 from rodfem.errors import InputError
-from rodfem.forms.contact import Coulomb
+from rodfem.forms.contact import DIRECTORS, RATES, Coulomb, section_kind, section_point_velocity
 
 
 def closest_points(p0, p1, q0, q1):
@@ -124,6 +140,13 @@ def closest_points(p0, p1, q0, q1):
     return d, a, b, n
 
 
+def section_coordinates(D, u):
+    """beta (m, 3) with sum_k beta_k d_k = u: the coordinates of the arms u (m, 3) in the frames D (m, 3, 3)
+    [pair, k, component] (solved: D is not orthonormal between nodes and at a step's midpoint, and the
+    exact moment sum_k beta_k d_k x f = u x f keeps the angular momentum)."""
+    return np.linalg.solve(np.transpose(D, (0, 2, 1)), u[:, :, None])[:, :, 0]
+
+
 class RodContact:
     """Contact of two rods (or strings), or self-contact of one (`System.contact(law, a, b)`; b None:
     self-contact of a).
@@ -135,8 +158,8 @@ class RodContact:
     (default pi r_A; >= 0);
     zone: the contact zone's size sqrt(2 R d) at the design penetration d (>= 0; 0: every segment pair
     weighs 1, see the module docstring);
-    friction: None (frictionless) or a Coulomb of forms/contact.py (regularized Coulomb friction between the
-    closest points, see the module docstring);
+    friction: None (frictionless) or a Coulomb of forms/contact.py (regularized Coulomb friction at the
+    tubes' contact point, see the module docstring);
     name: the history columns' prefix.
     """
 
@@ -159,6 +182,22 @@ class RodContact:
         self.friction = friction
 
     closest_points = staticmethod(closest_points)
+    section_coordinates = staticmethod(section_coordinates)   # the contact point in a section's frame
+    point_velocity = staticmethod(section_point_velocity)     # its velocity (forms/contact.py, as an obstacle's)
+
+    @staticmethod
+    def frame(names):
+        """The (directors, rates) fields of a body with the fields `names` whose friction acts at its
+        section's surface (a director section: a 3D rod), or None (a string: at its centreline)."""
+        return (DIRECTORS, RATES) if section_kind(names) == "directors" else None
+
+    def arms(self, d, self_contact):
+        """(rho_a, rho_b) = (r_A, r_B) d / R: the closest points' distances to the contact point along n."""
+        ra, rb = (self.radii[0],) * 2 if self_contact else self.radii
+        R = ra + rb
+        if R <= 0.0:
+            return np.zeros_like(d), np.zeros_like(d)
+        return ra * d / R, rb * d / R
 
     def reach(self, self_contact):
         """R = r_A + r_B: the centrelines' distance at which the tubes touch."""

@@ -43,11 +43,16 @@ difference quotient.  Newton's matrix is dF/dx_{n+1} of each contributing pair b
 differences.
 
 Friction (a law with a `friction`, forms/rod_contact.py): the friction force f of each pair in contact
-(the law's Coulomb `factor` times the slip v_t of the closest points at the midpoint) acts as f on body
-a's closest point and -f on body b's, shared by the nodes as the normal force is; its work
-h f . v_t <= 0 is the step's `dissipated`.  It needs the nodes' velocities (gathered with the
-positions) and h (`step(X0, h)`); Newton's matrix gets its derivatives in x_{n+1} and v_{n+1} (central
-differences).  Not in statics (at rest nothing slips).
+(the law's Coulomb `factor` times the slip v_t of the tubes' contact point at the midpoint) acts as f on
+body a's contact point and -f on body b's.  The point is the material point x_c + u of a body's
+section (u = -/+ rho n, the law's `arms`, in the section frame's coordinates beta: the law's
+`section_coordinates`) for a body whose fields the law names as a section frame (`frame`: directors
+and their rates, gathered with the positions), x_c for one without (a string).  The nodes share f as
+they share the normal force, (1 - a, a) and (1 - b, b), and their director rows get beta_k times it:
+the couple u x f on the section.  Its work h f . v_t <= 0 is the step's `dissipated`.  It needs the
+nodes' velocities and h (`step(X0, h)`); Newton's matrix gets its derivatives in the positions and
+directors at t_{n+1} and in the velocities and director rates (central differences).  Not in statics
+(at rest nothing slips).
 
 Newton's matrix pattern: the entries of the CANDIDATE pairs (the broad phase's, a superset of the
 pairs in contact) are added to the matrix's pattern in one re-preallocation when pairs appear that it
@@ -141,11 +146,13 @@ def rigid_projection(dX, Xm):
 
 class Centreline:
     """A flexible body's centreline nodes: the global indices of their positions q and velocities v
-    (n_nodes x 3 each) and arc lengths s, sorted along the body (on every rank)."""
+    (n_nodes x 3 each) and arc lengths s, sorted along the body (on every rank); with `frame` (the names of
+    a section frame's fields and of their rates, forms/rod_contact.py's `frame`) also those of the frame d
+    and its rates w (n_nodes x 3 x 3: node, director k, component), else d = w = None."""
 
     point = False   # a rigid body's centre: two nodes at the same place (a segment of zero length)
 
-    def __init__(self, ref, layout, i):
+    def __init__(self, ref, layout, i, frame=None):
         body = ref.body
         model = body.model
         position = getattr(model, "position", None)
@@ -155,25 +162,31 @@ class Centreline:
         if velocity is None or tuple(body.space.field(position).shape) != (3,):
             raise ConstraintError(f"contact with body {ref.name}: it must be a 3D rod or string (a centreline "
                                   "of 3 coordinates) or a 3D rigid body; planar bodies are not supported")
-        if body.space.field(position).family != "P" or body.space.field(velocity).family != "P":
-            raise ConstraintError(f"contact with body {ref.name}: its position must be a continuous (P) field")
+        names = [position, velocity] + ([*frame[0], *frame[1]] if frame is not None else [])
+        for name in names:
+            field = body.space.field(name)
+            if field.family != "P" or tuple(field.shape) != (3,):
+                raise ConstraintError(f"contact with body {ref.name}: its field {name} must be a continuous (P) 3-vector")
         l2g = layout.local_to_global(i)
         own = layout.sizes[i]
+        comm = layout.comm
         tables = []
-        for name in (position, velocity):
+        for name in names:
             Vi, dofs = body.space.collapse(name)
             dofs = dofs.reshape(-1, 3)
             s = Vi.tabulate_dof_coordinates()[: len(dofs), 0]
             owned = np.all(dofs < own, axis=1)
-            tables.append((s[owned], l2g[dofs[owned]]))
-        comm = layout.comm
-        (s, q), (sv, v) = ([np.concatenate(a) for a in zip(*comm.allgather(t))] for t in tables)
-        s, keep = np.unique(np.round(s, 12), return_index=True)
-        q = q[keep]
-        sv, keep_v = np.unique(np.round(sv, 12), return_index=True)
-        if len(sv) != len(s) or not np.allclose(sv, s):   # pragma: no cover - the same element for both
-            raise ConstraintError(f"contact with body {ref.name}: its position and velocity nodes differ")
-        self.name, self.s, self.q, self.v = ref.name, s, q, v[keep_v]
+            s, g = (np.concatenate(a) for a in zip(*comm.allgather((s[owned], l2g[dofs[owned]]))))
+            s, keep = np.unique(np.round(s, 12), return_index=True)
+            tables.append((s, g[keep]))
+        s = tables[0][0]
+        if any(len(t[0]) != len(s) or not np.allclose(t[0], s) for t in tables[1:]):   # pragma: no cover
+            raise ConstraintError(f"contact with body {ref.name}: its position, velocity and frame nodes differ")
+        self.name, self.s, self.q, self.v = ref.name, s, tables[0][1], tables[1][1]
+        self.d = self.w = None
+        if frame is not None:
+            self.d = np.stack([t[1] for t in tables[2:5]], axis=1)
+            self.w = np.stack([t[1] for t in tables[5:8]], axis=1)
 
     def _centre(self, ref, layout, i, position, velocity):
         """A rigid body's position x (its sphere's centre) as the segment of zero length [x, x]: both nodes
@@ -190,6 +203,7 @@ class Centreline:
         self.point = True
         self.name, self.s = ref.name, np.zeros(2)
         self.q, self.v = np.stack([q, q]), np.stack([v, v])
+        self.d = self.w = None   # no section frame: the friction acts at the centre (no couple on the body)
 
 
 def check_centre(body, name, position, velocity):
@@ -239,12 +253,37 @@ class Pairing:
         wb = 1.0 if not self.self_contact and getattr(self.b, "point", False) else np.minimum(1.0, lb / zone)
         return wa * wb * np.ones(len(pairs))
 
+    def lines(self):
+        """(line of a's nodes, line of b's nodes): b's is a's for self-contact."""
+        return self.a, self.a if self.self_contact else self.b
+
+    @property
+    def framed(self):
+        """Whether a section frame acts at either side's contact point (the friction's couples)."""
+        return any(ln.d is not None for ln in self.lines())
+
     def indices(self, pairs, which):
-        """Global indices (m, 4, 3) of the pairs' nodes' q or v dofs."""
-        A = getattr(self.a, which)
-        B = A if self.self_contact else getattr(self.b, which)
+        """Global indices of the pairs' nodes' dofs: (m, 4, 3) of 'q' or 'v', (m, 4, 3, 3) of the frame 'd' or
+        its rates 'w' (-1, ignored, on a side without a frame)."""
         i, j = pairs[:, 0], pairs[:, 1]
-        return np.stack([A[i], A[i + 1], B[j], B[j + 1]], axis=1)
+        parts = []
+        for line, k in zip(self.lines(), (i, j)):
+            A = getattr(line, which)
+            if A is None:
+                A = np.full((len(line.s), 3, 3), -1, dtype=np.int64)
+            parts += [A[k], A[k + 1]]
+        return np.stack(parts, axis=1)
+
+    def stack_frames(self, frames, pairs):
+        """The pairs' nodes' frame values (m, 4, 3, 3) from {id(line): (n, 3, 3)} (zeros on a side without one)."""
+        i, j = pairs[:, 0], pairs[:, 1]
+        parts = []
+        for line, k in zip(self.lines(), (i, j)):
+            F = frames.get(id(line))
+            if F is None:
+                F = np.zeros((len(line.s), 3, 3))
+            parts += [F[k], F[k + 1]]
+        return np.stack(parts, axis=1)
 
     def distance(self, X):
         d, a, b, n = self.law_points(X)
@@ -285,31 +324,69 @@ class Pairing:
             return self.law.slope(self.distance(0.5 * (X0 + X1)), self.R)
         return self.law.quotient(self.distance(X0), self.distance(X1), self.R)
 
-    def friction(self, X0, X1, V0, V1, w, rule="discrete-gradient"):
-        """(F, power): the friction forces on the pairs' nodes (m, 4, 3) and their power f . v_t <= 0 (m,) of the
-        step (forms/rod_contact.py): f = factor(N, |v_t|^2) v_t on body a's closest point, -f on body b's, with
-        the closest points' parameters and normal at X_m, the slip of the midpoint velocities and N = -w z."""
-        a, b, n = self.law_points(0.5 * (X0 + X1))[1:]
+    def friction(self, X0, X1, V0, V1, w, rule="discrete-gradient", frames=None):
+        """(F, G, power): the friction forces on the pairs' nodes' position rows F (m, 4, 3) and frame rows G
+        (m, 4, 3, 3; None without `frames`), and their power f . v_t <= 0 (m,) of the step (forms/rod_contact.py):
+        f = factor(N, |v_t|^2) v_t at body a's contact point, -f at body b's, with the closest points'
+        parameters and normal at X_m, the slip of the points' midpoint velocities and N = -w z.
+        frames: None, or the nodes' directors and their rates (S0, S1, T0, T1), each (m, 4, 3, 3)."""
+        Xm = 0.5 * (X0 + X1)
+        d, a, b, n = self.law_points(Xm)
         share = np.stack([1.0 - a, a, b - 1.0, -b], axis=1)                   # (m, 4): a's nodes +, b's -
-        rel = np.einsum("nk,nkj->nj", share, 0.5 * (V0 + V1))                  # v_a(a) - v_b(b) at the midpoint
+        Vm = 0.5 * (V0 + V1)
+        beta = None
+        if frames is not None:   # the contact point as the material point x_c + u of each side's section
+            S0, S1, T0, T1 = frames
+            Sm = 0.5 * (S0 + S1)
+            weights = np.abs(share)                                           # (1 - a, a, 1 - b, b)
+            rho_a, rho_b = self.law.arms(d, self.self_contact)
+            beta = np.zeros((len(d), 4, 3))
+            for side, (lo, u) in enumerate(((0, -rho_a[:, None] * n), (2, rho_b[:, None] * n))):
+                if self.lines()[side].d is None:
+                    continue
+                D = np.einsum("mi,mikj->mkj", weights[:, lo:lo + 2], Sm[:, lo:lo + 2])   # the frame at the point
+                beta[:, lo:lo + 2] = self.law.section_coordinates(D, u)[:, None, :]
+            Vm = self.law.point_velocity(Vm.reshape(-1, 3), beta.reshape(-1, 3),
+                                         (0.5 * (T0 + T1)).reshape(-1, 3, 3)).reshape(Vm.shape)
+        rel = np.einsum("nk,nkj->nj", share, Vm)                               # v_c,a - v_c,b at the midpoint
         vt = rel - np.einsum("nj,nj->n", rel, n)[:, None] * n
         N = np.maximum(-w * self.normal_effort(X0, X1, rule), 0.0)
         f = self.law.friction.factor(N, np.einsum("nj,nj->n", vt, vt))[:, None] * vt
-        return share[:, :, None] * f[:, None, :], np.einsum("nj,nj->n", f, vt)
+        F = share[:, :, None] * f[:, None, :]
+        G = None if beta is None else beta[:, :, :, None] * F[:, :, None, :]
+        return F, G, np.einsum("nj,nj->n", f, vt)
 
-    def friction_jacobian(self, X0, X1, V0, V1, w, rule="discrete-gradient"):
-        """(dF/dX1, dF/dV1), each (m, 12, 12) [pair, row, column], of `friction` by central differences."""
+    def friction_jacobian(self, X0, X1, V0, V1, w, rule="discrete-gradient", frames=None):
+        """(dR/dQ1, dR/dW1), each (m, r, r) [pair, row, column], of the friction's loads R = (F, G) (r = 12,
+        or 48 with `frames`) in the positions and directors Q1 = (X1, S1), resp. the velocities and rates
+        W1 = (V1, T1), at t_{n+1}: central differences."""
         m = len(X0)
+        args = [X0, X1, V0, V1] + (list(frames) if frames is not None else [])
+
+        def loads(values):
+            F, G, _ = self.friction(*values[:4], np.repeat(w, len(values[0]) // m), rule,
+                                    None if frames is None else tuple(values[4:]))
+            return F.reshape(len(F), -1) if G is None else np.concatenate([F.reshape(len(F), -1), G.reshape(len(G), -1)], axis=1)
+
+        scale_v = max(float(np.max(np.abs(V1), initial=0.0)), 1e-8)
+        unknowns = [[(1, FD_STEP * max(self.R, 1e-12))], [(3, FD_STEP * scale_v)]]
+        if frames is not None:
+            unknowns[0].append((5, FD_STEP))
+            unknowns[1].append((7, FD_STEP * max(float(np.max(np.abs(frames[3]), initial=0.0)), scale_v / max(self.R, 1e-12))))
         out = []
-        for k, step in ((1, FD_STEP * max(self.R, 1e-12)), (3, FD_STEP * max(float(np.max(np.abs(V1), initial=0.0)), 1e-8))):
-            E = np.eye(12).reshape(12, 4, 3) * step
-            args = [np.repeat(A, 12, axis=0) for A in (X0, X1, V0, V1)]
-            plus, minus = list(args), list(args)
-            plus[k] = (args[k].reshape(m, 12, 4, 3) + E[None]).reshape(-1, 4, 3)
-            minus[k] = (args[k].reshape(m, 12, 4, 3) - E[None]).reshape(-1, 4, 3)
-            wr = np.repeat(w, 12)
-            diff = (self.friction(*plus, wr, rule)[0] - self.friction(*minus, wr, rule)[0]).reshape(m, 12, 12) / (2 * step)
-            out.append(np.transpose(diff, (0, 2, 1)))
+        for group in unknowns:
+            columns = []
+            for k, step in group:
+                shape = args[k].shape[1:]
+                size = int(np.prod(shape))
+                E = np.eye(size).reshape(size, *shape) * step
+                rep = [np.repeat(A, size, axis=0) for A in args]
+                plus, minus = list(rep), list(rep)
+                plus[k] = (args[k][:, None] + E[None]).reshape(-1, *shape)
+                minus[k] = (args[k][:, None] - E[None]).reshape(-1, *shape)
+                diff = (loads(plus) - loads(minus)).reshape(m, size, -1) / (2 * step)
+                columns.append(np.transpose(diff, (0, 2, 1)))
+            out.append(np.concatenate(columns, axis=2))
         return out
 
     def jacobian(self, X0, X1, rest=False, rule="discrete-gradient"):
@@ -336,27 +413,36 @@ class BodyContacts:
         rest: statics (rodfem/analysis/statics.py) -- the force grad V(x) of the iterate, x_n = x_{n+1}."""
         self.comm, self.fixed, self.rule, self.rest = layout.comm, fixed, rule, rest
         index = {id(r): k for k, r in enumerate(refs)}
+        frames = {}   # the section frame each body's friction acts on (the first rubbing law that names one)
+        for law, a, b, name in items:
+            for ref in (a, b):
+                if (ref is not None and not rest and not ref.body.rigid and getattr(law, "friction", None) is not None
+                        and frames.get(id(ref)) is None):   # (a rigid body's sphere: friction at its centre)
+                    frames[id(ref)] = law.frame(ref.body.space.names)
         lines = {}
         for law, a, b, name in items:
             for ref in (a, b):
                 if ref is not None and id(ref) not in lines:
-                    lines[id(ref)] = Centreline(ref, layout, index[id(ref)])
+                    lines[id(ref)] = Centreline(ref, layout, index[id(ref)], frames.get(id(ref)))
         self.lines = list(lines.values())
         self.pairings = [Pairing(law, lines[id(a)], None if b is None else lines[id(b)], name)
                          for law, a, b, name in items]
         self.rubs = not rest and any(getattr(p.law, "friction", None) is not None for p in self.pairings)
-        kinds = ("q", "v") if self.rubs else ("q",)
-        wanted = np.concatenate([getattr(ln, kind).ravel() for kind in kinds for ln in self.lines]).astype(PETSc.IntType)
-        self.at, k = [], 0
-        for ln in self.lines:
-            self.at.append((k, len(ln.s)))
-            k += 3 * len(ln.s)
-        self.v_at = k   # where the velocities start in the gathered vector
+        # the gathered vector: each line's positions (then, with friction, velocities, frames and their rates)
+        self.slots, wanted, k = [], [], 0
+        for kind in ("q", "v", "d", "w") if self.rubs else ("q",):
+            for ln in self.lines:
+                idx = getattr(ln, kind)
+                if idx is not None:
+                    self.slots.append((kind, id(ln), k, idx.shape))
+                    wanted.append(idx.ravel())
+                    k += idx.size
+        wanted = np.concatenate(wanted).astype(PETSc.IntType)
         root = self.comm.rank == 0
         self.gathered = PETSc.Vec().createSeq(len(wanted) if root else 0, comm=PETSc.COMM_SELF)
         is_from = PETSc.IS().createGeneral(wanted if root else np.zeros(0, PETSc.IntType), comm=PETSc.COMM_SELF)
         self.scatter = PETSc.Scatter().create(X, is_from, self.gathered, None)
-        self.x0 = self.v0 = None
+        self.x0 = self.s0 = None
         self.h = 0.0
         self._terms = []
         self._known = [set() for _ in self.pairings]   # the pairs (keys) whose entries the matrix's pattern holds
@@ -366,24 +452,27 @@ class BodyContacts:
         self.seconds = {"search": 0.0, "forces": 0.0, "matrix": 0.0}   # rank 0's CPU time in the contact (benchmarks)
 
     def gather(self, X):
-        """({id(line): node positions (n, 3)}, {id(line): node velocities} (None without friction)) of the
-        state X (rank 0; None elsewhere)."""
+        """{kind: {id(line): values}} of the state X (rank 0; None elsewhere): kind 'q' the node positions
+        (n, 3); with friction also 'v' their velocities, 'd' the frames (n, 3, 3) and 'w' their rates (the
+        lines with a frame)."""
         self.scatter.scatter(X, self.gathered, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         if self.comm.rank != 0:
-            return None, None
+            return None
         vals = self.gathered.getArray(readonly=True)
-        x = {id(ln): vals[k:k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
-        v = ({id(ln): vals[self.v_at + k:self.v_at + k + 3 * n].reshape(n, 3).copy() for ln, (k, n) in zip(self.lines, self.at)}
-             if self.rubs else None)
-        return x, v
+        out = {kind: {} for kind in ("q", "v", "d", "w")}
+        for kind, line, k, shape in self.slots:
+            out[kind][line] = vals[k:k + int(np.prod(shape))].reshape(shape).copy()
+        return out
 
     def nodes(self, X):
         """{id(line): node positions (n, 3)} of the state X (rank 0; None elsewhere)."""
-        return self.gather(X)[0]
+        state = self.gather(X)
+        return None if state is None else state["q"]
 
     def step(self, X0, h=0.0):
         """The step of size h from x_n = X0 (collective)."""
-        self.x0, self.v0 = self.gather(X0)
+        self.s0 = self.gather(X0)
+        self.x0 = None if self.s0 is None else self.s0["q"]
         self.h = float(h)
 
     # -- the coupling's contract (rodfem/fem/assembly.py) -----------------------------------------
@@ -403,12 +492,21 @@ class BodyContacts:
                 self._known[k].update(new.tolist())
                 nb = len((p.a if p.self_contact else p.b).s)
                 pairs = np.column_stack(np.divmod(new, nb))
-                rows = p.indices(pairs, "v").reshape(-1, 12)
-                for kind in ("q", "v") if getattr(p.law, "friction", None) is not None and self.rubs else ("q",):
-                    cols = p.indices(pairs, kind).reshape(-1, 12)
-                    out.append((np.repeat(rows, 12, axis=1).ravel(), np.tile(cols, (1, 12)).ravel()))
+                rubs = getattr(p.law, "friction", None) is not None and self.rubs
+                rows = self._index(p, pairs, ("v", "w") if rubs and p.framed else ("v",))
+                for kinds in (("q", "d"), ("v", "w")) if rubs else (("q",),):
+                    cols = self._index(p, pairs, kinds if p.framed else kinds[:1])
+                    r = np.repeat(rows, cols.shape[1], axis=1).ravel()
+                    c = np.tile(cols, (1, rows.shape[1])).ravel()
+                    keep = (r >= 0) & (c >= 0)
+                    out.append((r[keep], c[keep]))
         grown = self.comm.bcast(bool(out), root=0)
         return out if grown else None
+
+    @staticmethod
+    def _index(p, pairs, kinds):
+        """The global indices (m, 12 or 48 ...) of the pairs' dofs of the kinds ('q', 'v', 'd', 'w'), side by side."""
+        return np.concatenate([p.indices(pairs, kind).reshape(len(pairs), -1) for kind in kinds], axis=1)
 
     def _active(self, p, x0, x1):
         """The candidate pairs of pairing p (the broad phase's) and those in contact at x_n, x_m or x_{n+1}:
@@ -423,7 +521,8 @@ class BodyContacts:
 
     def update(self, X):
         start = time.process_time()
-        x1, v1 = self.gather(X)
+        state = self.gather(X)
+        x1 = None if state is None else state["q"]
         if self.rest:
             self.x0 = x1
         self._terms = []
@@ -434,8 +533,13 @@ class BodyContacts:
                 if not len(pairs):
                     continue
                 rubs = self.rubs and getattr(p.law, "friction", None) is not None
-                V = (p.stack(self.v0[id(p.a)], None if p.self_contact else self.v0[id(p.b)], pairs),
-                     p.stack(v1[id(p.a)], None if p.self_contact else v1[id(p.b)], pairs)) if rubs else None
+                V = None
+                if rubs:   # (V0, V1, frames): the velocities, and the frames and rates at t_n, t_{n+1} (or None)
+                    b = None if p.self_contact else id(p.b)
+                    V = (p.stack(self.s0["v"][id(p.a)], None if b is None else self.s0["v"][b], pairs),
+                         p.stack(state["v"][id(p.a)], None if b is None else state["v"][b], pairs),
+                         tuple(p.stack_frames(src[kind], pairs) for kind in ("d", "w") for src in (self.s0, state))
+                         if p.framed else None)   # (S0, S1, T0, T1)
                 self._terms.append((p, pairs, X0, X1, w, V))
         self.seconds["search"] += time.process_time() - start
 
@@ -474,11 +578,14 @@ class BodyContacts:
         lost = 0.0
         for p, pairs, X0, X1, w, V in self._terms:
             vals = w[:, None, None] * p.force(X0, X1, self.rule)
-            if V is not None:   # friction: the force on the node is minus the residual's term
-                F, power = p.friction(X0, X1, *V, w, self.rule)
-                vals = vals - F
+            kinds = ("v",)
+            if V is not None:   # friction: the load on the node is minus the residual's term
+                F, G, power = p.friction(X0, X1, *V[:2], w, self.rule, V[2])
+                vals = (vals - F).reshape(len(pairs), -1)
+                if G is not None:
+                    vals, kinds = np.concatenate([vals, -G.reshape(len(pairs), -1)], axis=1), ("v", "w")
                 lost -= self.h * float(np.sum(power))
-            rows = self._free(p.indices(pairs, "v").ravel())
+            rows = self._free(self._index(p, pairs, kinds).ravel())
             own = rows >= 0          # (a Vec does not ignore the index -1 as a Mat does: the supported rows out)
             b.setValues(rows[own], np.ascontiguousarray(vals.ravel()[own]), addv=PETSc.InsertMode.ADD)
         self.dissipated = self.comm.bcast(lost, root=0)
@@ -487,31 +594,39 @@ class BodyContacts:
     def jacobian(self, X, A):
         start = time.process_time()
         for p, pairs, X0, X1, w, V in self._terms:
-            rows = self._free(p.indices(pairs, "v").reshape(-1, 12))
             blocks = w[:, None, None] * p.jacobian(X0, X1, self.rest, self.rule)
-            parts = [(self._free(p.indices(pairs, "q").reshape(-1, 12)), blocks)]
-            if V is not None:
-                dq, dv = p.friction_jacobian(X0, X1, *V, w, self.rule)
-                parts[0] = (parts[0][0], parts[0][1] - dq)
-                parts.append((self._free(p.indices(pairs, "v").reshape(-1, 12)), -dv))
-            for cols, blocks in parts:
-                for r, c, block in zip(rows, cols, np.ascontiguousarray(blocks)):
+            if V is None:
+                parts = [(self._index(p, pairs, ("v",)), self._index(p, pairs, ("q",)), blocks)]
+            else:   # the friction's rows (positions, frames) in the positions and frames, velocities and rates
+                framed = V[2] is not None
+                dq, dv = p.friction_jacobian(X0, X1, *V[:2], w, self.rule, V[2])
+                dq[:, :12, :12] -= blocks
+                rows = self._index(p, pairs, ("v", "w") if framed else ("v",))
+                parts = [(rows, self._index(p, pairs, ("q", "d") if framed else ("q",)), -dq),
+                         (rows, self._index(p, pairs, ("v", "w") if framed else ("v",)), -dv)]
+            for rows, cols, vals in parts:
+                rows, cols = self._free(rows), self._free(cols)
+                for r, c, block in zip(rows, cols, np.ascontiguousarray(vals)):
                     A.setValues(r, c, block, addv=PETSc.InsertMode.ADD)
         self.seconds["matrix"] += time.process_time() - start
 
     def _friction_columns(self, p):
         """name.Ft_x, _y, _z: the friction force on body a (zero for self-contact), and name.Mf_x, _y, _z: the
-        moment sum (x_c - y_c)_m x f of the pairs' force couples (module docstring of forms/rod_contact.py),
-        of the last step (its last Newton iterate)."""
+        moment about the origin of all the pair's friction loads (forces and section couples, the discrete
+        moment sum x_m x F + sum_k d_k,m x G_k of the nodes' loads), of the last step (its last Newton iterate):
+        the rate at which friction changes the total angular momentum -- zero between two rods (to
+        round-off), rho_b n x f per pair where only one side has a section (forms/rod_contact.py)."""
         Ft, Mf = np.zeros(3), np.zeros(3)
         for q, pairs, X0, X1, w, V in self._terms:
             if q is not p or V is None:
                 continue
-            F, _ = p.friction(X0, X1, *V, w, self.rule)
+            F, G, _ = p.friction(X0, X1, *V[:2], w, self.rule, V[2])
             Xm = 0.5 * (X0 + X1)
             if not p.self_contact:
                 Ft += (F[:, 0] + F[:, 1]).sum(axis=0)
             Mf += np.cross(Xm, F).sum(axis=(0, 1))
+            if G is not None:
+                Mf += np.cross(0.5 * (V[2][0] + V[2][1]), G).sum(axis=(0, 1, 2))
         out = {f"{p.name}.Ft_{c}": float(v) for c, v in zip("xyz", Ft)}
         out.update({f"{p.name}.Mf_{c}": float(v) for c, v in zip("xyz", Mf)})
         return out

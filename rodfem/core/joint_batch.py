@@ -28,14 +28,17 @@ def batchable(joint) -> bool:
 class _Group:
     """Joints with the same number of coordinates n and conditions m, stacked."""
 
-    def __init__(self, joints, fixed):
+    def __init__(self, joints, fixed, at=None, counted=None):
         self.joints = joints
         self.Q = np.array([j.Q for j in joints])                        # [k, m, n, n]
         self.c = np.array([j.c for j in joints])                        # [k, m, n]
         self.e = np.array([j.e for j in joints])                        # [k, m]
-        self.q_at = np.array([j.q_at for j in joints], dtype=np.int64)  # positions in the gathered values
-        self.v_at = np.array([j.v_at for j in joints], dtype=np.int64)
-        self.lam_at = np.array([j.lam_at for j in joints], dtype=np.int64)
+        # positions in the gathered values (`at`: global indices -> positions; else the joints' own)
+        self.q_at, self.v_at, self.lam_at = (
+            np.array([at(getattr(j, k + "_index")) if at else getattr(j, k + "_at") for j in joints], dtype=np.int64)
+            for k in ("q", "v", "lam"))
+        # the joints whose supplied work is summed here (a joint computed on two ranks counts on one)
+        self.counted = np.ones(len(joints), bool) if counted is None else np.asarray(counted, bool)
         self.q_index = np.array([j.q_index for j in joints], dtype=np.int64)   # global indices
         self.v_index = np.array([j.v_index for j in joints], dtype=np.int64)
         self.lam_index = np.array([j.lam_index for j in joints], dtype=np.int64)
@@ -81,7 +84,7 @@ class _Group:
         GT = G.transpose(0, 2, 1)
         blocks = [0.5 * np.einsum("ki,kiab->kab", lam, self.Q), GT, 0.5 * np.einsum("kiab,kb->kia", self.Q, vm),
                   0.5 * G, np.zeros(lam.shape + (self.m,))]
-        work = -float(np.sum(lam * dgp)) if self.driven else 0.0
+        work = -float(np.sum((lam * dgp)[self.counted])) if self.driven else 0.0
         return r_v, r_lam, blocks, work
 
     def position_residual(self, v, t):
@@ -97,17 +100,23 @@ class JointBatch:
 
     Each joint must have its indices set (rodfem/core/system.py's PointIndex: q_index, v_index,
     lam_index and the positions q_at, v_at, lam_at in the gathered values); `fixed`: the global
-    indices of the dofs fixed by supports."""
+    indices of the dofs fixed by supports.  Bodies placed whole on ranks (rodfem/core/joint_ranks.py):
+    `at` maps global indices to positions in this rank's gathered values, `own` = (lo, hi) keeps the
+    rows lo <= row < hi only (this rank's) and `counted[k]` tells whether joint k's work is summed here."""
 
-    def __init__(self, joints, fixed):
+    def __init__(self, joints, fixed, at=None, own=None, counted=None):
         fixed = np.array(sorted(fixed), dtype=np.int64)
-        by_shape = {}
-        for j in joints:
+        by_shape, where = {}, {}
+        for k, j in enumerate(joints):
             by_shape.setdefault((len(j.q_index), j.size), []).append(j)
-        self.groups = [_Group(js, fixed) for js in by_shape.values()]
+            where.setdefault((len(j.q_index), j.size), []).append(k)
+        counted = np.ones(len(joints), bool) if counted is None else np.asarray(counted, bool)
+        self.groups = [_Group(js, fixed, at, counted[where[key]]) for key, js in by_shape.items()]
+        lo, hi = own if own is not None else (np.iinfo(np.int64).min, np.iinfo(np.int64).max)
         rows, cols, self._keep = [], [], []
         for g in self.groups:
             for r, c, keep in g.entries():
+                keep = keep & (r >= lo) & (r < hi)
                 rows.append(r[keep])
                 cols.append(c[keep])
                 self._keep.append(keep)
@@ -122,9 +131,10 @@ class JointBatch:
         self._cols = cols[self._order].astype(PETSc.IntType)
         self._rowmap = self._rowmap.astype(PETSc.IntType)
         # the residual's rows: the free momentum rows and every constraint row
-        self._res_keep = [(g.free_v.ravel(), np.ones(g.lam_index.size, bool)) for g in self.groups]
+        self._res_keep = [(g.free_v.ravel() & (g.v_index.ravel() >= lo) & (g.v_index.ravel() < hi),
+                           (g.lam_index.ravel() >= lo) & (g.lam_index.ravel() < hi)) for g in self.groups]
         self._res_rows = np.concatenate(
-            [np.concatenate([g.v_index.ravel()[kv], g.lam_index.ravel()]) for g, (kv, _) in
+            [np.concatenate([g.v_index.ravel()[kv], g.lam_index.ravel()[kl]]) for g, (kv, kl) in
              zip(self.groups, self._res_keep)]).astype(PETSc.IntType) if self.groups else np.zeros(0, PETSc.IntType)
         self._terms = None
 
@@ -140,9 +150,12 @@ class JointBatch:
     def residual(self, b):
         if not self._terms or not len(self._res_rows):
             return
-        values = np.concatenate([np.concatenate([r_v.ravel()[kv], r_lam.ravel()])
-                                 for (r_v, r_lam, _, _), (kv, _) in zip(self._terms, self._res_keep)])
-        b.setValues(self._res_rows, values, addv=PETSc.InsertMode.ADD)
+        b.setValues(self._res_rows, self.residual_values(), addv=PETSc.InsertMode.ADD)
+
+    def residual_values(self):
+        """The residual's values at the rows `_res_rows` (of the last `update`)."""
+        return np.concatenate([np.concatenate([r_v.ravel()[kv], r_lam.ravel()[kl]])
+                               for (r_v, r_lam, _, _), (kv, kl) in zip(self._terms, self._res_keep)])
 
     def jacobian(self, A):
         if not self._terms or not len(self.rows):

@@ -34,13 +34,14 @@ from rodfem.core.body import Body
 from rodfem.core.bodycontact import CLEARANCE, BodyContacts, check_centre, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
+from rodfem.core.joint_ranks import RankJoints
 from rodfem.core.joints import Frame, Joint, MovingGround, Point
 from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
 from rodfem.core.spaces import dofs_per_element
 from rodfem.errors import ConstraintError, NewtonFailure
-from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max
+from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max, allreduce_sum
 from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
 from rodfem.nls.newton import Newton, Solve
@@ -336,6 +337,7 @@ class System:
         self.newton = Newton(assembler=self.assembler, options=self.newton_options)
         self.n_elements = sum(r.body.n_elements for r in refs if not r.body.rigid)
         self._scalar_forms, self._x1_values = {}, np.zeros(self.layout.size_local)
+        self._evaluated = None   # the sums of the state x_{n+1}, in one reduction (`_evaluate`)
         for key in ["H", "work", "dissipation"] + self.columns:   # (built now: part of the build's cost)
             self._functionals(key)
         self._monitored = [(r.name, r.body) for r in local if r.body.contacts]
@@ -501,13 +503,14 @@ class System:
 
     def _push(self, X, which):
         self._segments(which).put(X.getArray(readonly=True))
-        if self.comm.size > 1 and not self.distributed:   # the ghosts
+        if self.comm.size > 1 and not self.layout.distributed:   # the ghosts (none: bodies whole on ranks)
             for r in self.bodies.values():
                 getattr(r.body, which).x.scatter_forward()
 
     def set_state(self, X):
         """x_n = x_{n+1} = X (a vector in the system's layout), pushed to every body."""
         self.build()
+        self._evaluated = None
         X.copy(self.X0)
         X.copy(self.X1)
         self._push(self.X0, "x0")
@@ -542,6 +545,7 @@ class System:
         for equal steps), x_n if `previous` is None; x_n is read from the bodies (a change made to a
         body's x0 between steps takes effect)."""
         self.build()
+        self._evaluated = None
         self._pull(self.X0, "x0")
         if previous is None:
             self.X0.copy(self.X1)
@@ -563,6 +567,7 @@ class System:
     def restore(self, snapshot):
         """x_n = x_{n+1} and the control laws' states of `snapshot`."""
         x, states = snapshot
+        self._evaluated = None
         self.X0.getArray()[:] = x
         self.X0.copy(self.X1)
         self._push(self.X0, "x0")
@@ -619,6 +624,7 @@ class System:
     def solve(self, step: int, t: float) -> Solve:
         """x_{n+1} at time t by Newton (raises NewtonFailure; also for a step whose contact pairs may have passed
         through each other: rodfem/core/bodycontact.py, `BodyContacts.crossing`)."""
+        self._evaluated = None
         if self.points is not None:
             self.points.step(self.X0, t - self.dt, t, self.dt)
         if self.body_contacts is not None:
@@ -634,6 +640,7 @@ class System:
 
     def accept(self):
         """x_n <- x_{n+1} (and the control laws' states); returns the old x_n (for the next prediction)."""
+        self._evaluated = None
         if any(getattr(c, "stateful", False) for c in self.components):
             self.points.advance(self.X0, self.X1)
         previous = self.X0.getArray(readonly=True).copy()
@@ -658,6 +665,48 @@ class System:
             totals = self.comm.allreduce(np.array(totals), op=MPI.SUM).tolist()
         return dict(zip(keys, totals))
 
+    def _evaluate(self):
+        """Under mpirun, the sums over the ranks a step's row needs, of the state x_{n+1}, in one reduction:
+        {key: total} of the bodies' H, work, dissipation and history columns ("obs:..."), the joints' and
+        components' supplied work and dissipated energy ("joints.work", "joints.dissipated"), and with the
+        joints' terms on the ranks of their rows (rodfem/core/joint_ranks.py, `_observed_on_ranks`) every
+        joint's multipliers ("lambda": each owned by one rank) and their largest position residual
+        ("constraint_residual").  Kept until the state changes (solve, predict, accept, set_state, restore)."""
+        if self._evaluated is not None:
+            return self._evaluated
+        X = self._x1_values
+        self._segments("x1").get(X)   # (what the bodies' Functions hold: a scene may have set them)
+        keys = ["H", "work", "dissipation"] + self.columns
+        local = [sum(self._functionals(k).values(X)) for k in keys]
+        local += list(self.joint_rows._sums) if self.joint_rows is not None else [0.0, 0.0]
+        keys += ["joints.work", "joints.dissipated"]
+        ranked = self._observed_on_ranks()
+        if ranked:   # the multipliers (this rank's in their places) and the largest |g| of each rank
+            lam = np.zeros(len(self.layout.multipliers))
+            k, at = self.layout.owned_multipliers()
+            lam[k] = self.X1.getArray(readonly=True)[at]
+            gap = np.zeros(self.comm.size)
+            gap[self.comm.rank] = self.points.ranked.worst_gap(self.X1, self.points.times[1])
+            local = np.concatenate([local, lam, gap])
+        total = allreduce_sum(self.comm, local)
+        out = dict(zip(keys, total[:len(keys)].tolist()))
+        if ranked:
+            n = len(self.layout.multipliers)
+            out["lambda"] = total[len(keys):len(keys) + n].tolist()
+            out["constraint_residual"] = float(np.max(total[len(keys) + n:]))
+        self._evaluated = out
+        return out
+
+    def _observed_on_ranks(self) -> bool:
+        """True when every joint's read-out comes from the ranks of its rows (bodies whole on ranks, the
+        plain joints only: no component, servo or marker read on rank 0)."""
+        p = self.points
+        return p is not None and p.ranked is not None and not p.rooted and not self.markers
+
+    def _total(self, key):
+        """The sum over the ranks of the functional `key` at x_{n+1} (collective)."""
+        return self._sum(key) if self.comm.size == 1 else self._evaluate()[key]
+
     def _functionals(self, key):
         """The bodies' forms `key` (rodfem/fem/batch.py: those of the same compiled form together)."""
         if key not in self._scalar_forms:
@@ -677,10 +726,12 @@ class System:
         stored = self.points.stored_energy(self.X1) if self.components else 0.0
         if self.body_contacts is not None:
             stored += self.body_contacts.energy(self.X1)
-        return self._sum("H") + stored
+        return self._total("H") + stored
 
     def supplied_work(self) -> float:
         """h y.u of the last step: the bodies' ports, the driven joints and the servos' inputs."""
+        if self.comm.size > 1:
+            return self._total("work") + self._evaluate()["joints.work"]
         joints = self.joint_rows.work if self.joint_rows is not None else 0.0
         return self._sum("work") + joints
 
@@ -696,6 +747,9 @@ class System:
 
     def dissipated_energy(self) -> float:
         """h d_n of the last step: the sum over the dissipating bodies, dampers and the contacts' friction."""
+        if self.comm.size > 1:
+            return (self._total("dissipation") + (self._evaluate()["joints.dissipated"] if self.components else 0.0)
+                    + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
         return (self._sum("dissipation") + (self.joint_rows.dissipated if self.components else 0.0)
                 + (self.body_contacts.dissipated if self.body_contacts is not None else 0.0))
 
@@ -703,10 +757,18 @@ class System:
         """The history's columns of the state x_{n+1}."""
         self.build()
         obs = {}
-        columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
+        if self.comm.size > 1:
+            total = self._evaluate()
+            columns = {k[4:]: total[k] for k in self.columns}
+        else:
+            columns = {k[4:]: v for k, v in self._sums(self.columns).items()}
         if self.single:
             obs.update(columns)
-        if self.points is not None:
+        if self._observed_on_ranks():   # (the same columns as PointIndex.observe)
+            obs.update(zip(self.points.lam_names, total["lambda"]))
+            if self.joints:
+                obs["constraint_residual"] = total["constraint_residual"]
+        elif self.points is not None:
             obs.update(self.points.observe(self.X1))
         if not self.single:
             obs.update(columns)
@@ -804,6 +866,9 @@ class PointIndex:
         plain = [j for j in self.joints if batchable(j)]
         self.batch = JointBatch(plain, self.fixed) if plain else None
         self.unbatched = [j for j in self.joints if self.batch is None or not batchable(j)]
+        # bodies placed whole on ranks: the plain joints' terms on the ranks of their rows (rodfem/core/joint_ranks.py)
+        self.ranked = RankJoints(plain, self.fixed, layout, layout.create_vector()) if layout.distributed and plain else None
+        self.rooted = self.ranked is None or bool(self.unbatched or self.components)   # terms computed on rank 0
         self.x0_values, self.times = None, (system.t, system.t, system.dt)   # x_0 at its time: no step yet
 
     def values(self, X):
@@ -812,8 +877,10 @@ class PointIndex:
         return self.gathered.getArray(readonly=True).copy() if self.comm.rank == 0 else None
 
     def step(self, X0, t0, t1, h):
-        """The step from x_n (X0) at t0 to t1 = t0 + h."""
-        self.x0_values, self.times = self.values(X0), (t0, t1, h)
+        """The step from x_n (X0) at t0 to t1 = t0 + h (x_n's values on rank 0 only if terms are computed there)."""
+        if self.ranked is not None:
+            self.ranked.step(X0)
+        self.x0_values, self.times = self.values(X0) if self.rooted else None, (t0, t1, h)
 
     def advance(self, X0, X1):
         """The stateful control laws' states at t_{n+1} (computed on rank 0, then the same on every rank)."""
@@ -923,6 +990,7 @@ class Couplings:
 
     def __init__(self, parts):
         self.parts = parts
+        self.local_rows = all(getattr(p, "local_rows", False) for p in parts)
 
     def entries(self):
         return [e for p in self.parts for e in p.entries()]
@@ -961,6 +1029,12 @@ class JointRows:
         self.batch = points.batch if type(self).update is JointRows.update else None
         self.joints = [j for j in points.joints if self.batch is None or not batchable(j)]   # the others
         self.components = points.components
+        # bodies placed whole on ranks: the plain joints on the ranks of their rows (rodfem/core/joint_ranks.py);
+        # `local_rows`: no term added to another rank's rows (the assembler skips the exchange of entries)
+        self.ranked = points.ranked if self.batch is not None else None
+        if self.ranked is not None:
+            self.batch = None
+        self.local_rows = self.ranked is not None and not self.joints and not self.components
         self._batch_work = 0.0
         self._sums = (0.0, 0.0)   # (work, dissipated) of the last residual, on rank 0: `work`, `dissipated`
         self._terms = []
@@ -968,6 +1042,8 @@ class JointRows:
     def entries(self):
         """(rows, cols) of every entry the joints can fill (the same on every rank)."""
         out = self.batch.entries() if self.batch is not None else []
+        if self.ranked is not None and self.ranked.batch is not None:
+            out += self.ranked.batch.entries()
         for j in self.joints:
             v, q = j.v_index[j.rows], j.q_index[j.qcols]
             lam = j.lam_index
@@ -985,9 +1061,14 @@ class JointRows:
         return out
 
     def update(self, X):
-        """The joints' terms at the iterate X (rank 0; nothing elsewhere)."""
-        vals = self.points.values(X)
+        """The joints' terms at the iterate X (rank 0; nothing elsewhere; the ranked joints on their ranks)."""
         self._terms, self._batch_work = [], 0.0
+        if self.ranked is not None:
+            t0, t1, h = self.points.times
+            self._batch_work = self.ranked.update(X, h, t0, t1)
+            if self.local_rows:
+                return
+        vals = self.points.values(X)
         if self.comm.rank == 0:
             v0 = self.points.x0_values
             t0, t1, h = self.points.times
@@ -1009,6 +1090,8 @@ class JointRows:
         work, lost = self._batch_work, 0.0
         if self.batch is not None and self.comm.rank == 0:
             self.batch.residual(b)
+        if self.ranked is not None:
+            self.ranked.residual(b.getArray())
         for j, r_v, r_lam, _, w, d in self._terms:
             b.setValues(j.v_index[j.rows].astype(PETSc.IntType), np.ascontiguousarray(r_v[j.rows]),
                         addv=PETSc.InsertMode.ADD)
@@ -1021,7 +1104,11 @@ class JointRows:
     def _shared_sums(self):
         """(work, dissipated) of the last residual, the same on every rank (collective: read by the time
         loop once a step, not at every residual)."""
-        return self._sums if self.comm.size == 1 else self.comm.bcast(self._sums, root=0)
+        if self.comm.size == 1:
+            return self._sums
+        if self.ranked is not None:   # (each rank its joints' work)
+            return tuple(self.comm.allreduce(np.array(self._sums), op=MPI.SUM).tolist())
+        return self.comm.bcast(self._sums, root=0)
 
     @property
     def work(self):
@@ -1036,6 +1123,8 @@ class JointRows:
     def jacobian(self, X, A):
         if self.batch is not None and self.comm.rank == 0:
             self.batch.jacobian(A)
+        if self.ranked is not None:
+            self.ranked.jacobian(A)
         for j, _, _, blocks, _, _ in self._terms:
             index = {"v": (j.v_index, j.rows), "q": (j.q_index, j.qcols), "lam": (j.lam_index, list(range(len(j.lam_index))))}
             for rk, ck, block in blocks:

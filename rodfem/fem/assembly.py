@@ -246,7 +246,9 @@ class BlockAssembler:
     coupling: None, or an object with ``entries()`` -> [(rows, cols)] global index arrays,
     ``residual(X, b)`` and ``jacobian(X, A)`` adding its terms (global indices, any rank), and
     ``update(X)`` called before either with the iterate; optionally ``grow()`` (collective), called
-    before each Jacobian: None, or [(rows, cols)] to add to the pattern first (`extend_matrix`).
+    before each Jacobian: None, or [(rows, cols)] to add to the pattern first (`extend_matrix`), and
+    ``local_rows`` (True: it adds to its own rank's rows only; with a RankLayout no entry is then
+    exchanged between ranks).
     """
 
     def __init__(self, layout, blocks, coupling=None, batch=False):
@@ -265,6 +267,11 @@ class BlockAssembler:
         self.units = self.batches + self.single   # what assembles: batches, and the blocks on their own
         entries = [u.entries() for u in self.units] + (coupling.entries() if coupling else [])
         self.A = layout.create_matrix(entries)
+        # bodies whole on ranks and a coupling that adds to its own rank's rows only: no entry for another
+        # rank, so the matrix's assembly exchanges none (PETSc skips its stash) and the residual needs none
+        self.local_rows = layout.distributed and (coupling is None or bool(getattr(coupling, "local_rows", False)))
+        if self.local_rows:
+            self.A.setOption(PETSc.Mat.Option.NO_OFF_PROC_ENTRIES, True)
         for u in self.units:
             u.attach(self.A)
         self._state = self._nonzero_state(self.A)
@@ -309,8 +316,9 @@ class BlockAssembler:
         del arr
         if self.coupling:
             self.coupling.residual(self.vector, b)
-            b.assemblyBegin()
-            b.assemblyEnd()
+            if not self.local_rows:
+                b.assemblyBegin()
+                b.assemblyEnd()
 
     def jacobian(self, xin, A):
         X = self.vector.getArray(readonly=True)   # the iterate of the last residual (SNES: the same x)
@@ -344,4 +352,13 @@ def allreduce_max(comm, array):
     """Elementwise maximum over the ranks (each entry known on the rank that owns it, -1 or -inf elsewhere)."""
     array = np.ascontiguousarray(array, dtype=float if np.asarray(array).dtype.kind == "f" else np.int64)
     comm.Allreduce(MPI.IN_PLACE, array, op=MPI.MAX)
+    return array
+
+
+def allreduce_sum(comm, array):
+    """The sum over the ranks of a float array, as a new array (one MPI_Allreduce on its buffer: without
+    mpi4py's pickling of the lower-case allreduce, microseconds instead of tens of them)."""
+    array = np.array(array, dtype=float, order="C")
+    if comm.size > 1:
+        comm.Allreduce(MPI.IN_PLACE, array, op=MPI.SUM)
     return array

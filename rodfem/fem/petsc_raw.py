@@ -52,15 +52,18 @@ def _check(code, what):
         raise RuntimeError(f"PETSc {what} failed (error {code})")
 
 
-def blocks(A):
+def blocks(A, columns=True):
     """(diagonal block handle, off-diagonal block handle or None, global columns of the off-diagonal
-    block's local columns) of an assembled AIJ matrix (sequential: (A, None, empty))."""
+    block's local columns) of an assembled AIJ matrix (sequential: (A, None, empty)); `columns` False:
+    None for the columns (they cost a copy of the off-diagonal block's structure)."""
     if A.getType() in ("seqaij", "seqaijcusparse"):
         return A.handle, None, np.zeros(0, np.int64)
     Ad, Ao = ctypes.c_void_p(), ctypes.c_void_p()
     colmap = ctypes.POINTER(ctypes.c_int32)()
     _check(lib().MatMPIAIJGetSeqAIJ(ctypes.c_void_p(A.handle), ctypes.byref(Ad), ctypes.byref(Ao),
                                     ctypes.byref(colmap)), "MatMPIAIJGetSeqAIJ")
+    if not columns:
+        return Ad.value, Ao.value, None
     i, j = rowij(Ao.value)
     ncols = int(j.max()) + 1 if j.size else 0
     garray = np.ctypeslib.as_array(colmap, shape=(ncols,)).astype(np.int64) if ncols else np.zeros(0, np.int64)

@@ -57,6 +57,7 @@ from petsc4py import PETSc
 from scipy.linalg import LinAlgWarning
 
 from rodfem.fem import petsc_raw
+from rodfem.fem.assembly import allreduce_sum
 from rodfem.la.partial_lu import PartialLU
 
 INTERIOR_SOLVERS = ("rcm", "nd", "amd", "superlu", "mumps")   # rcm, nd, amd: rodfem/la/partial_lu.py, that order
@@ -124,7 +125,7 @@ class InterfaceSchur:
     def setUp(self, pc):
         A, _ = pc.getOperators()
         self.comm = A.getComm().tompi4py()
-        nz = self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
+        nz = self._pattern_key(A)
         if self.fallback is not None and nz != self.pattern:
             # a new pattern (contact entries added): MUMPS afresh (MUMPS 5.7 crashes in its
             # redistribution when a factorization is redone on a matrix whose pattern grew)
@@ -146,6 +147,14 @@ class InterfaceSchur:
         self.fallback.setOperators(A)
         self.fallback.setUp()
         self.ready = True
+
+    def _pattern_key(self, A):
+        """What changes when A's nonzero pattern changes, the same on every rank: PETSc's nonzero state
+        (MatGetNonzeroState: an AIJ matrix's assembly sums its blocks' states over the ranks), with
+        A's identity; without the C library, the number of nonzeros summed over the ranks (collective)."""
+        if petsc_raw.usable():
+            return (A.handle, petsc_raw.nonzero_state(A))
+        return self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
 
     def apply(self, pc, b, x):
         """x = A^{-1} b; a singular A (no finite solution on some rank, or MUMPS refusing it) marks
@@ -175,7 +184,7 @@ class InterfaceSchur:
             x.set(np.nan)
         with np.errstate(invalid="ignore"):
             finite = bool(np.all(np.isfinite(x.getArray(readonly=True))))
-        if not self.comm.allreduce(finite, op=MPI.LAND):
+        if allreduce_sum(self.comm, [0.0 if finite else 1.0])[0] > 0.0:   # (any rank's solution not finite)
             petsc_raw.pc_set_failed(pc)
 
     def _apply(self, b, x):
@@ -190,7 +199,7 @@ class InterfaceSchur:
             if self.nG:
                 g = np.zeros(self.nG)
                 g[self.G_own_pos] = barr[self.G_own]
-                xG = self._solve_interface(self.comm.allreduce(g + zG, op=MPI.SUM))
+                xG = self._solve_interface(allreduce_sum(self.comm, g + zG))
             out = x.getArray()
             self.plu.backward(xG, out)
             if self.nG:
@@ -205,7 +214,7 @@ class InterfaceSchur:
             g = np.zeros(self.nG)
             g[self.G_own_pos] = barr[self.G_own]
             g -= self.AGC @ y[self.C]
-            xG = self._solve_interface(self.comm.allreduce(g, op=MPI.SUM))
+            xG = self._solve_interface(allreduce_sum(self.comm, g))
             if len(self.ZG):
                 y = y - self.Z @ xG[self.ZG]
             y[self.G_own] = xG[self.G_own_pos]
@@ -392,7 +401,7 @@ class InterfaceSchur:
             block = np.zeros((self.nG, len(self.cols_GC)))
             if len(self.rows_Gown):
                 block[self.G_own_pos] = A.getValues(self.rows_Gown, self.cols_GC)
-            block = self.comm.allreduce(block, op=MPI.SUM)
+            block = allreduce_sum(self.comm, block)
             self.A_GG = block[:, :self.nG]
             self.AGC = np.ascontiguousarray(block[:, self.nG + self.C_pos])
         T["extract"] += time.perf_counter() - t0
@@ -419,7 +428,7 @@ class InterfaceSchur:
                                      postpone=(diagonal.array if K["interior"] is None
                                                else diagonal.array[K["interior"]]) == 0)
                 diagonal.destroy()
-            Ad, Ao, _ = petsc_raw.blocks(A)
+            Ad, Ao, _ = petsc_raw.blocks(A, columns=False)
             values = [petsc_raw.Values(h, read=True) for h in (Ad, Ao) if h is not None]
             addresses = [v.open() for v in values]
             try:
@@ -429,10 +438,17 @@ class InterfaceSchur:
                 for v in values:
                     v.close()
             self.times["lu"] += time.perf_counter() - t0
-            if self.comm.allreduce(corner is not None, op=MPI.LAND):
+            # the ranks' corners summed and their zero pivots counted in one reduction
+            t1 = time.perf_counter()
+            sums = np.zeros(self.nG * self.nG + 1)
+            if corner is not None:
+                sums[:-1] = np.ravel(corner) if self.nG else 0.0
+            else:
+                sums[-1] = 1.0
+            sums = allreduce_sum(self.comm, sums)
+            if sums[-1] == 0.0:
                 if self.nG:
-                    t1 = time.perf_counter()
-                    self.S = self.A_GG + self.comm.allreduce(corner.copy(), op=MPI.SUM)
+                    self.S = self.A_GG + sums[:-1].reshape(self.nG, self.nG)
                     self.times["S"] += time.perf_counter() - t1
                 return True
             self.solver, self.plu = FOLLOWING[self.solver], None

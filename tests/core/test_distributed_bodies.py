@@ -132,3 +132,26 @@ row(res, s, steps=float(len(res.rows)), rejected=float(res.stepping["rejected"])
     assert parallel.pop("placed") and serial.pop("placed")
     assert serial["steps"] > 7 and serial["rejected"] >= 1   # (adapted: more steps than 6, some rejected)
     assert_same_rows(serial, parallel)
+
+
+@pytest.mark.mpi
+def test_driven_joint_between_ranks_equals_serial():
+    """A driven `angle` joint beside the pin between b1 and b2 (on 2 ranks the bodies of different ranks:
+    rodfem/core/joint_ranks.py computes it on both, each adding its own rows, its supplied work counted
+    once; two joints at one point: rows added twice on one rank): the energy balance to 1e-12 and the
+    history (H, supplied work, every multiplier) on 2 and 3 ranks the serial one."""
+    script = COMMON + """
+sys.path.insert(0, "tests/core")
+from rodfem.forms import joints
+from test_batch import chain
+s = chain(4, sizes=[2, 3, 2, 3])
+s.join(joints.angle, s.bodies["b1"].end, s.bodies["b2"].start, name="motor", drive=lambda t: [40.0 * t * t])
+res = run(s, 1e-3, 6e-3)
+assert max(abs(e) for e in res.column("balance_error")) <= 1e-12 * max(abs(h) for h in res.column("H"))
+assert abs(res.column("supplied")[-1]) > 1e-6
+row(res, s)
+"""
+    serial, *parallel = script_on_ranks(script, ranks=(1, 2, 3), timeout=300)
+    for p in parallel:
+        assert p.pop("placed")
+        assert_same_rows({k: v for k, v in serial.items() if k != "placed"}, p)

@@ -22,7 +22,7 @@ from rodfem.core.components import potential
 from rodfem.errors import ConstraintError, ParameterError
 from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
-from rodfem.forms.contact import stiffness_for
+from rodfem.forms.contact import Coulomb, stiffness_for
 from rodfem.forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
 from rodfem.forms.rod_contact import RodContact, closest_points
 from rodfem.forms.string import String
@@ -324,6 +324,36 @@ def test_ball_hitting_a_free_string_keeps_momentum_and_energy():
     assert result.max_balance_error <= 1e-12 * column(result, "H").max()
     for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
         assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * M * V * L, key
+
+
+def test_a_spinning_ball_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_the_ball_arm():
+    """With friction (Coulomb(0.3)) a RigidBody ball (it has directors, but the sphere is a side without a
+    section: the friction acts at its centre) hits a free rod while sliding along it: the linear momentum stays
+    to round-off, the friction's work is never positive, the balance (with `dissipated`) is exact, the total
+    angular momentum changes by exactly h rub.Mf per step (the ball's arm R_s d / R of the couple, not applied
+    to its rotation)."""
+    M, V, R_s, L, r = 0.02, 0.5, 0.02, 0.5, 0.01
+    s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
+    rod = s.add("rod", rod_model(1e7), L, 6, initial=straight(L))
+    Jb = 0.4 * M * R_s**2
+    ball = s.add("ball", RigidBody(M, (Jb, Jb, Jb)),
+                 initial=RigidBody.initial((0.07, 0.0, r + R_s + 1e-3), v=(0.2, 0.0, -V), omega=(1.0, 2.0, 0.5)))
+    m_eff = 1 / (1 / M + 1 / (1750 * np.pi * r**2 * L))
+    s.contact(RodContact(1.5 * m_eff * V**2 / 1e-3**3, r, radius_b=R_s, friction=Coulomb(0.3)), rod, ball, name="rub")
+    s.marker("ball", ball.point())
+    h = 2e-4
+    result = run(s, h, 0.01)
+    assert column(result, "rub.N").max() > 0
+    scale = M * V
+    for key in ("p_x", "p_y", "p_z"):
+        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * scale, key
+    Mf = np.column_stack([column(result, f"rub.Mf_{c}") for c in "xyz"])
+    Lt = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
+    assert np.abs(Mf).max() > 1e-3 * R_s * 0.3 * column(result, "rub.N").max()
+    assert np.abs(np.diff(Lt, axis=0) - h * Mf[1:]).max() <= 1e-13 * scale * L
+    lost = np.diff(column(result, "dissipated"))
+    assert lost.min() >= 0 and lost.max() > 0
+    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
 
 
 # -- bad input -----------------------------------------------------------------------------------
