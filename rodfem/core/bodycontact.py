@@ -203,7 +203,7 @@ class Centreline:
         self.point = True
         self.name, self.s = ref.name, np.zeros(2)
         self.q, self.v = np.stack([q, q]), np.stack([v, v])
-        self.d = self.w = None   # no section frame: the friction acts at the centre (no couple on the body)
+        self.d = self.w = None   # no section frame (whatever `frame` says): friction at the centre, no couple
 
 
 def check_centre(body, name, position, velocity):
@@ -416,8 +416,7 @@ class BodyContacts:
         frames = {}   # the section frame each body's friction acts on (the first rubbing law that names one)
         for law, a, b, name in items:
             for ref in (a, b):
-                if (ref is not None and not rest and not ref.body.rigid and getattr(law, "friction", None) is not None
-                        and frames.get(id(ref)) is None):   # (a rigid body's sphere: friction at its centre)
+                if ref is not None and not rest and getattr(law, "friction", None) is not None and frames.get(id(ref)) is None:
                     frames[id(ref)] = law.frame(ref.body.space.names)
         lines = {}
         for law, a, b, name in items:
