@@ -53,6 +53,7 @@ JOINTS_PLANAR = "tests/models/test_joint_oracles.py::test_planar_joint_between_a
 LINEAR_COMPONENTS = "tests/analysis/test_linearize_components.py"
 CONTACT = "tests/models/test_contact.py"
 ROD_CONTACT = "tests/models/test_rod_contact.py"
+RIGID_ROD = "tests/models/test_rigid_rod_contact.py"
 LINKING = "tests/analysis/test_linking.py"
 PLECTONEME = "tests/models/test_plectoneme.py"
 ROD_FRICTION = "tests/models/test_rod_friction.py"
@@ -598,7 +599,7 @@ MUTATIONS = [
        f"{ROD_CONTACT}::test_self_contact_stops_a_hairpin_from_passing_through_itself"],
       "the rods' contact energy left out of H"),
     M("rodcontact-zone-unweighted", "rodfem/core/bodycontact.py",
-      [("        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)", "        return np.ones(len(pairs))")],
+      [("        return wa * wb * np.ones(len(pairs))", "        return np.ones(len(pairs))")],
       [f"{ROD_CONTACT}::test_segment_pairs_sharing_the_contact_zone_converge_to_the_double_integral"],
       "segments shorter than the contact zone not sharing it: the contact stiffens with the mesh"),
     M("rodcontact-one-sided-force", "rodfem/core/bodycontact.py",
@@ -706,6 +707,40 @@ MUTATIONS = [
       [("        reach = float(np.max(radii)) + float(np.max(other_radii))", "        reach = float(np.max(radii))")],
       [f"{ROD_FRICTION}::test_broad_phase_between_two_bodies_finds_every_overlap"],
       "the two bodies' k-d trees searched within max r_a instead of max r_a + max r_b: overlaps missed"),
+
+    # -- a rigid body's sphere against a rod or string (issue 24) -------------------------------------
+    M("rigidrod-point-divides-by-zero", "forms/rod_contact.py",
+      [("    point_p, point_q = A <= tiny, E <= tiny", "    point_p, point_q = A < 0.0 * tiny, E < 0.0 * tiny")],
+      [f"{RIGID_ROD}::test_point_to_segment_distance_against_a_brute_force_search",
+       f"{RIGID_ROD}::test_ball_hitting_a_stiff_rod_at_its_centre[equal]"],
+      "a segment of zero length through the general formula: 0/0 (NaN) for the sphere's centre"),
+    M("rigidrod-point-unclamped", "forms/rod_contact.py",
+      [("    a = np.where(point_q, np.where(point_p, 0.0, np.clip(-C / A1, 0.0, 1.0)), a)",
+        "    a = np.where(point_q, np.where(point_p, 0.0, -C / A1), a)")],
+      [f"{RIGID_ROD}::test_point_to_segment_distance_against_a_brute_force_search"],
+      "the sphere centre's projection onto the segment's line left unclamped (beyond the segment)"),
+    M("rigidrod-local-indices", "rodfem/core/bodycontact.py",
+      [("            found.append(l2g[dofs] if len(dofs) and np.all(dofs < own) else np.zeros(0, np.int64))",
+        "            found.append(dofs if len(dofs) and np.all(dofs < own) else np.zeros(0, np.int64))")],
+      [f"{RIGID_ROD}::test_ball_hitting_a_stiff_rod_at_its_centre[equal]"],
+      "the rigid body's position dofs by their local index, not the global one (another body's rows)"),
+    M("rigidrod-zone-weight-of-the-point", "rodfem/core/bodycontact.py",
+      [('        wb = 1.0 if not self.self_contact and getattr(self.b, "point", False) else np.minimum(1.0, lb / zone)',
+        "        wb = np.minimum(1.0, lb / zone)")],
+      [f"{RIGID_ROD}::test_a_sphere_counts_as_one_point_in_the_contact_zone_weights"],
+      "the sphere's centre weighted by its zero length over the zone: no contact with a zone"),
+    M("rigidrod-frame-of-the-ball", "rodfem/core/bodycontact.py",
+      [("        self.d = self.w = None   # no section frame (whatever `frame` says): friction at the centre, no couple\n", "")],
+      [f"{RIGID_ROD}::test_a_spinning_ball_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_the_ball_arm"],
+      "a rigid body's sphere without its (empty) section frame: friction with a RigidBody ball fails"),
+    M("rigidrod-radius-zero-allowed", "rodfem/core/system.py",
+      [("            if not radius > 0:", "            if radius < 0:")],
+      [f"{RIGID_ROD}::test_bad_input_is_refused_in_one_line"],
+      "a sphere of radius 0 accepted"),
+    M("rigidrod-radius-other-side", "rodfem/core/system.py",
+      [("            radius = law.radii[k]", "            radius = law.radii[1 - k]")],
+      [f"{RIGID_ROD}::test_bad_input_is_refused_in_one_line"],
+      "the sphere's radius checked on the rod's side"),
 
     # -- the capstan and the grasp (issue 24) --------------------------------------------------------
     M("capstan-friction-normal-unscaled", "forms/contact.py",

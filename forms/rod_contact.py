@@ -49,6 +49,19 @@ What the discretization is and is not:
   (by default pi r: a rod bent back on itself with the tightest radius its section allows, r,
   touches itself at arc distance pi r) are left out, the neighbours always.
 
+A rigid body's sphere (`System.contact(law, rod, ball)`, either order): the sphere of radius R_s (the
+law's radius on the rigid body's side) about the body's position x is the segment of zero length
+[x, x], so that for each segment of the rod
+
+    d_j = min over b in [0, 1] of |x - y(b)|,        g_j = d_j - (R_s + r_rod),
+
+the distance of the centre to the segment (`closest_points` takes the point's own branch: the clamped
+projection), and the same energy V = sum_j w_j psi(g_j) (the point's weight 1).  The force -psi'(g) n
+acts at the centre (on x) and at the rod's closest point: it has no moment about x, so it does not turn
+the rigid body (its rotation plays no part in the gap).  With friction the sphere is a side without a
+section, as a string (below): the friction acts at its centre, and the couple of its arm is not applied
+to the rigid body's rotation (it shows in name.Mf).
+
 Friction (`friction=Coulomb(mu_s, mu_k, eps, v_s)`, forms/contact.py's regularized Coulomb law, the same
 object as an obstacle's) acts at the CONTACT POINT of the two tubes.  With the closest points x_c, y_c
 (parameters a, b), their distance d and the normal n (from y_c to x_c) of the midpoint state X_m, the
@@ -101,17 +114,26 @@ def closest_points(p0, p1, q0, q1):
     """The closest points of the segments [p0, p1] and [q0, q1] (arrays (n, 3) of n segment pairs):
     (d, a, b, n) with d the distance, a, b in [0, 1] the closest points' parameters along each segment,
     n the unit vector from y(b) to x(a).  The exact clamped minimization (Ericson, Real-Time Collision
-    Detection, Morgan Kaufmann 2005, Sec. 5.1.9); parallel segments: a = 0 (one of the closest pairs)."""
+    Detection, Morgan Kaufmann 2005, Sec. 5.1.9); parallel segments: a = 0 (one of the closest pairs); a
+    segment of zero length (|q1 - q0|^2 <= 1e-28 of the pair's squared size: a point, b = 0) has the
+    closest point of the other segment to it (Ericson's degenerate cases), and so has a point against a
+    point (a = b = 0)."""
     u, v, w = p1 - p0, q1 - q0, p0 - q0
     A, E = np.einsum("ij,ij->i", u, u), np.einsum("ij,ij->i", v, v)
     B, C, F = np.einsum("ij,ij->i", u, v), np.einsum("ij,ij->i", u, w), np.einsum("ij,ij->i", v, w)
+    tiny = 1e-28 * (A + E + np.einsum("ij,ij->i", w, w))
+    point_p, point_q = A <= tiny, E <= tiny          # a segment of zero length: a point (a sphere's centre)
+    A1, E1 = np.where(point_p, 1.0, A), np.where(point_q, 1.0, E)
     denom = A * E - B * B
-    parallel = denom <= 1e-14 * A * E
+    parallel = (denom <= 1e-14 * A * E) | point_p | point_q
     a = np.where(parallel, 0.0, np.clip((B * F - C * E) / np.where(parallel, 1.0, denom), 0.0, 1.0))
-    b = (B * a + F) / E
+    b = (B * a + F) / E1
     low, high = b < 0.0, b > 1.0
-    a = np.where(low, np.clip(-C / A, 0.0, 1.0), np.where(high, np.clip((B - C) / A, 0.0, 1.0), a))
+    a = np.where(low, np.clip(-C / A1, 0.0, 1.0), np.where(high, np.clip((B - C) / A1, 0.0, 1.0), a))
     b = np.clip(b, 0.0, 1.0)
+    # point to segment (Ericson's degenerate cases): the projection of the point, clamped
+    a = np.where(point_q, np.where(point_p, 0.0, np.clip(-C / A1, 0.0, 1.0)), a)
+    b = np.where(point_q, 0.0, np.where(point_p, np.clip(F / E1, 0.0, 1.0), b))
     diff = (p0 + a[:, None] * u) - (q0 + b[:, None] * v)
     d = np.sqrt(np.einsum("ij,ij->i", diff, diff))
     n = diff / np.maximum(d, 1e-300)[:, None]

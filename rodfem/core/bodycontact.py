@@ -6,6 +6,14 @@ bodies a and b (b None: self-contact of a).  The law gives, for segment pairs of
 reach R (the distance at which the tubes touch), the energy psi(d, R) and its difference quotient
 z = [psi(d_{n+1}) - psi(d_n)] / (d_{n+1} - d_n) (`quotient`).
 
+One of the two bodies may be rigid (a 3D rigid body: a sphere about its position): its position x is a
+centreline of two nodes at the same place, [x, x], with the same global indices (`Centreline.point`),
+so everything below holds for it unchanged: the pair's 4 nodes are x_i, x_{i+1}, x, x; the forces on
+the two copies add up on x's rows and Newton's columns of both on x's columns (PETSc adds repeated
+indices); the rigid projection treats x as a node (twice: the rigid motions move both copies alike,
+so P dX is the same on both and D . dX = d_{n+1} - d_n still holds with the work z D . dX done on x
+once per copy).  The rigid body's rotation gets no force: the sphere's contact acts through its centre.
+
 The step's force on the 4 nodes X = (x_i, x_{i+1}, y_j, y_{j+1}) of a segment pair is z D, with D a
 discrete gradient of the distance that also keeps the momenta:
 
@@ -142,14 +150,18 @@ class Centreline:
     a section frame's fields and of their rates, forms/rod_contact.py's `frame`) also those of the frame d
     and its rates w (n_nodes x 3 x 3: node, director k, component), else d = w = None."""
 
+    point = False   # a rigid body's centre: two nodes at the same place (a segment of zero length)
+
     def __init__(self, ref, layout, i, frame=None):
         body = ref.body
         model = body.model
         position = getattr(model, "position", None)
         velocity = getattr(model, "kinematics", {}).get(position)
-        if body.rigid or velocity is None or tuple(body.space.field(position).shape) != (3,):
+        if body.rigid:
+            return self._centre(ref, layout, i, position, velocity)
+        if velocity is None or tuple(body.space.field(position).shape) != (3,):
             raise ConstraintError(f"contact with body {ref.name}: it must be a 3D rod or string (a centreline "
-                                  "of 3 coordinates); rigid and planar bodies are not supported")
+                                  "of 3 coordinates) or a 3D rigid body; planar bodies are not supported")
         names = [position, velocity] + ([*frame[0], *frame[1]] if frame is not None else [])
         for name in names:
             field = body.space.field(name)
@@ -175,6 +187,30 @@ class Centreline:
         if frame is not None:
             self.d = np.stack([t[1] for t in tables[2:5]], axis=1)
             self.w = np.stack([t[1] for t in tables[5:8]], axis=1)
+
+    def _centre(self, ref, layout, i, position, velocity):
+        """A rigid body's position x (its sphere's centre) as the segment of zero length [x, x]: both nodes
+        have the same global indices, so the pair's forces on them add up on x's rows (and Newton's matrix
+        entries on its columns)."""
+        check_centre(ref.body, ref.name, position, velocity)
+        own = layout.sizes[i]
+        l2g = layout.local_to_global(i)
+        found = []
+        for name in (position, velocity):
+            dofs = np.asarray(ref.body.space.field_dofs(name), dtype=np.int64)
+            found.append(l2g[dofs] if len(dofs) and np.all(dofs < own) else np.zeros(0, np.int64))
+        q, v = (np.concatenate(layout.comm.allgather(f)) for f in found)
+        self.point = True
+        self.name, self.s = ref.name, np.zeros(2)
+        self.q, self.v = np.stack([q, q]), np.stack([v, v])
+        self.d = self.w = None   # no section frame (whatever `frame` says): friction at the centre, no couple
+
+
+def check_centre(body, name, position, velocity):
+    """Refuse a rigid body without a 3D position field (and its velocity) to carry a sphere."""
+    if position is None or velocity is None or tuple(body.space.field(position).shape) != (3,):
+        raise ConstraintError(f"contact with rigid body {name}: its model needs a position field of 3 coordinates "
+                              "(`position`, with its velocity in `kinematics`) for the sphere's centre")
 
 
 class Pairing:
@@ -213,7 +249,9 @@ class Pairing:
             return np.ones(len(pairs))
         la = np.diff(self.a.s)[pairs[:, 0]]
         lb = np.diff((self.a if self.self_contact else self.b).s)[pairs[:, 1]]
-        return np.minimum(1.0, la / zone) * np.minimum(1.0, lb / zone)
+        wa = 1.0 if getattr(self.a, "point", False) else np.minimum(1.0, la / zone)   # (a sphere's centre: weight 1)
+        wb = 1.0 if not self.self_contact and getattr(self.b, "point", False) else np.minimum(1.0, lb / zone)
+        return wa * wb * np.ones(len(pairs))
 
     def lines(self):
         """(line of a's nodes, line of b's nodes): b's is a's for self-contact."""

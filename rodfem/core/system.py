@@ -31,7 +31,7 @@ from petsc4py import PETSc
 
 from rodfem.common.limits import check_elements
 from rodfem.core.body import Body
-from rodfem.core.bodycontact import CLEARANCE, BodyContacts, check_law, fixed_dofs
+from rodfem.core.bodycontact import CLEARANCE, BodyContacts, check_centre, check_law, fixed_dofs
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joint_ranks import RankJoints
@@ -201,7 +201,8 @@ class System:
     def contact(self, law, a: BodyRef, b: Optional[BodyRef] = None, name: str = ""):
         """Contact between the centrelines of the flexible bodies a and b (3D rods, strings), or of a with
         itself (b None), by the law (forms/rod_contact.py: `RodContact`); its energy joins H, its columns
-        are name.energy, name.N, name.Fn_x, ... (rodfem/core/bodycontact.py)."""
+        are name.energy, name.N, name.Fn_x, ... (rodfem/core/bodycontact.py).  One of a, b may be a 3D
+        rigid body: a sphere about its position, of the law's radius on its side."""
         name = name or f"{getattr(law, 'name', 'contact')}" + (f"{len(self.contacts) + 1}" if self.contacts else "")
         what = f"contact {name}"
         check_law(law, what)
@@ -212,10 +213,20 @@ class System:
                 continue
             if not isinstance(ref, BodyRef) or self.bodies.get(ref.name) is not ref:
                 raise ConstraintError(f"{what}: {ref!r} is not a body of this system (use the BodyRef that add returns)")
-            if ref.body.rigid:
-                raise ConstraintError(f"{what}: body {ref.name} is rigid; contact between centrelines needs rods or strings")
         if b is a:
             raise ConstraintError(f"{what}: a body with itself is self-contact: give b = None")
+        rigid = [k for k, ref in enumerate((a, b)) if ref is not None and ref.body.rigid]
+        if rigid and (b is None or len(rigid) == 2):
+            raise ConstraintError(f"{what}: a rigid body's sphere touches a rod or string (one rigid body per contact, "
+                                  "no self-contact)")
+        for k in rigid:   # the sphere about the rigid body's position (rodfem/core/bodycontact.py)
+            ref = (a, b)[k]
+            check_centre(ref.body, ref.name, getattr(ref.body.model, "position", None),
+                         getattr(ref.body.model, "kinematics", {}).get(getattr(ref.body.model, "position", None)))
+            radius = law.radii[k]
+            if not radius > 0:
+                raise ConstraintError(f"{what}: {('radius', 'radius_b')[k]}, the radius of rigid body {ref.name}'s "
+                                      f"sphere, must be > 0 (got {radius!r})")
         self._check_name(name)
         if any(c[3] == name for c in self.contacts):
             raise ConstraintError(f"contact name {name!r} is used twice")

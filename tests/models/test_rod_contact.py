@@ -362,8 +362,8 @@ def test_bad_input_is_refused_in_one_line():
     s = System()
     a = s.add("a", rod_model(1e6), 0.5, 2)
     ball = s.add("ball", PointMass(1.0, 3), initial=PointMass.initial((0, 0, 1.0), (0, 0, 0)))
-    with pytest.raises(ConstraintError, match="rigid"):
-        s.contact(RodContact(1.0, 0.01), a, ball)
+    with pytest.raises(ConstraintError, match="rigid"):   # (a sphere of radius > 0: tests/models/test_rigid_rod_contact.py)
+        s.contact(RodContact(1.0, 0.01, radius_b=0.0), a, ball)
     with pytest.raises(ConstraintError, match="self-contact: give b = None"):
         s.contact(RodContact(1.0, 0.01), a, a)
     with pytest.raises(ConstraintError, match="not a rod contact law"):
