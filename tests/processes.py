@@ -55,18 +55,23 @@ def rodfem(*args, np=None, env=None, timeout=600):
                           env=environment(**(env or {})), cwd=REPO, timeout=timeout + 30)
 
 
+JIT_LOCK_NOTICE = "rodfem: waiting for the JIT cache lock"
+
+
 def rodfem_lines(stderr):
-    """The lines of stderr that are rodfem's: without the launcher's framed help text (a block between
-    two lines of dashes), which Open MPI 5 (Debian 13) prints after a rank's non-zero exit and has no
-    setting to silence (Open MPI 4's `-q`), and its launcher's "[host:pid] PMIX ERROR: PMIX_ERR_UNREACH"
-    when both ranks exit at once."""
+    """The lines of stderr that are rodfem's message: without the launcher's framed help text (a block
+    between two lines of dashes), which Open MPI 5 (Debian 13) prints after a rank's non-zero exit and has
+    no setting to silence (Open MPI 4's `-q`), its launcher's "[host:pid] PMIX ERROR: PMIX_ERR_UNREACH"
+    when both ranks exit at once, and rodfem's notice that it waits for the JIT cache lock (another test
+    process compiling the same forms: the suite runs on two workers)."""
     lines, inside = [], False
     for line in stderr.strip().splitlines():
         if line.startswith("-" * 20) and not line.strip("-"):
             inside = not inside
         elif not inside:
             lines.append(line)
-    return [ln for ln in lines if ln.strip() and not (ln.startswith("[") and "] PMIX ERROR: " in ln)]
+    return [ln for ln in lines if ln.strip() and not (ln.startswith("[") and "] PMIX ERROR: " in ln)
+            and not ln.startswith(JIT_LOCK_NOTICE)]
 
 
 def ok(p):

@@ -149,12 +149,11 @@ class InterfaceSchur:
         self.ready = True
 
     def _pattern_key(self, A):
-        """What changes when A's nonzero pattern changes, the same on every rank: PETSc's nonzero state
-        (MatGetNonzeroState: an AIJ matrix's assembly sums its blocks' states over the ranks), with
-        A's identity; without the C library, the number of nonzeros summed over the ranks (collective)."""
-        if petsc_raw.usable():
-            return (A.handle, petsc_raw.nonzero_state(A))
-        return self.comm.allreduce(A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"], op=MPI.SUM)
+        """What changes when A's nonzero pattern changes, the same on every rank: A's identity and its
+        number of nonzeros summed over the ranks (collective).  Not PETSc's nonzero state: entries put
+        in preallocated places (the contact's pattern grown ahead) leave it unchanged."""
+        nz = A.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"]
+        return (A.handle, nz if self.comm.size == 1 else self.comm.allreduce(nz, op=MPI.SUM))
 
     def apply(self, pc, b, x):
         """x = A^{-1} b; a singular A (no finite solution on some rank, or MUMPS refusing it) marks

@@ -5,6 +5,7 @@ created without input; the full rank reproduces the full model; bad input refuse
 import numpy as np
 import pytest
 from mpi4py import MPI
+from processes import rodfem_lines
 
 from rodfem.analysis.galerkin import ReducedSystem, layout, pod_basis
 from rodfem.analysis.timeloop import run
@@ -153,4 +154,4 @@ def test_cli_trains_and_checks(tmp_path, rodfem):
 def test_cli_bad_input_is_one_line(tmp_path, rodfem, args, message):
     p = rodfem("reduce", "cantilever-2d", "--set", "n_elements=4", "--set", "t_end=0.01", "--set", "degree=2", *args,
                "--out", tmp_path / "x")
-    assert p.returncode == 2 and message in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert p.returncode == 2 and message in p.stderr and len(rodfem_lines(p.stderr)) == 1, p.stderr

@@ -261,7 +261,7 @@ def test_unverified_slepc_result_above_the_fallback_size_is_refused(monkeypatch)
 
 
 def one_error_line(p):
-    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    lines = rodfem_lines(p.stderr)
     assert p.returncode == 2 and len(lines) == 1 and lines[0].startswith("rodfem: error: "), p.stderr
     return lines[0]
 
@@ -291,7 +291,7 @@ def test_cli_slepc_modes_of_the_relaxation_cluster(tmp_path, rodfem):
     omega, _, _ = natural_modes(lin, 6, "dense")
     assert np.allclose(info["omega_rad_s"], omega, rtol=1e-8, atol=0)
     assert np.allclose(info["damping_ratio"], lin.damping, rtol=0, atol=1e-8)
-    named = p.stdout.strip().splitlines()[-1].split(": ", 1)[1].split(", ")
+    named = rodfem_lines(p.stdout)[-1].split(": ", 1)[1].split(", ")
     assert named == ["modes.csv", "modes.json", "modes.png", "mode_shapes.npz", "summary.json"]
     assert info["files"] == named[:4]        # (modes.json is written before the summary)
     assert all((out / f).stat().st_size > 0 for f in named)

@@ -109,7 +109,7 @@ def test_a_free_beam_has_no_equilibrium_one_line_error(rodfem):
     """flying-spaghetti-2d is free and loaded: no equilibrium -> exit 3, one line."""
     p = rodfem("static", "flying-spaghetti-2d", "--time", "1", "--out", "/tmp/rodfem-no-equilibrium")
     assert p.returncode == 3, p.stderr
-    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    lines = rodfem_lines(p.stderr)
     assert len(lines) == 1 and "static solve failed" in lines[0], p.stderr
 
 

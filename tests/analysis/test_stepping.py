@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
+from processes import rodfem_lines
 
 from rodfem import System, run
 from rodfem.analysis.stepping import StepControl
@@ -139,7 +140,7 @@ def test_a_resumed_adaptive_run_equals_the_uninterrupted_one(tmp_path, monkeypat
 def test_below_the_smallest_step_the_run_ends_with_exit_3_in_one_line(sets, words, capsys, tmp_path):
     args = [x for a in sets for x in ("--set", a)]
     assert main(["run", "flexible-robot-arm-2d", *args, "--quiet", "--out", str(tmp_path)]) == 3
-    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    lines = rodfem_lines(capsys.readouterr().err)
     assert len(lines) == 1 and all(w in lines[0] for w in words), lines
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "newton-failure"
 

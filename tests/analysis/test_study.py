@@ -3,6 +3,7 @@ import csv
 import json
 
 import pytest
+from processes import rodfem_lines
 
 from rodfem.app.cli import main
 from rodfem.app.study import run_study
@@ -86,7 +87,7 @@ def test_every_run_is_checked_before_any_runs(tmp_path, capsys):
     assert main([*RU, "--elements", "4", "1000000000", "--out", str(tmp_path)]) == 2
     captured = capsys.readouterr()
     assert "run n_elements" not in captured.out
-    lines = captured.err.strip().splitlines()
+    lines = rodfem_lines(captured.err)
     assert len(lines) == 1 and lines[0].startswith("rodfem: error: --elements 1000000000: n_elements = 1000000000 "
                                                    "needs about"), lines
     assert not tmp_path.exists() or not list(tmp_path.iterdir())
@@ -105,7 +106,7 @@ def test_finished_runs_are_kept_when_a_later_one_fails(tmp_path, capsys, monkeyp
         return real(scene, p, n, dt, repeats)
     monkeypatch.setattr(study_module, "_run", failing)
     assert main([*RU, "--dt", "0.05", "0.025", "0.0125", "--elements", "4", "--out", str(tmp_path)]) == 2
-    assert capsys.readouterr().err.strip().splitlines() == [
+    assert rodfem_lines(capsys.readouterr().err) == [
         f"rodfem: error: the disk is full (simulated); results so far kept in {tmp_path}/"]
     with open(tmp_path / "study.csv") as f:
         rows = {float(r["dt"]): r for r in csv.DictReader(f)}

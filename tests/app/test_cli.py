@@ -3,7 +3,7 @@ import json
 
 import numpy as np
 import pytest
-from processes import history, serial_and_parallel
+from processes import history, rodfem_lines, serial_and_parallel
 
 from rodfem.app.cli import main
 
@@ -77,7 +77,8 @@ def test_bad_input_is_one_line(args, words, capsys, tmp_path):
     extra = {"run": ["--quiet", "--out", str(tmp_path / "x")], "study": ["--out", str(tmp_path / "x")]}
     assert main(args + extra.get(args[0], [])) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("rodfem: error:")
+    lines = rodfem_lines(err)
+    assert len(lines) == 1 and lines[0].startswith("rodfem: error:")
     for w in words:
         assert w in err
 
@@ -110,7 +111,7 @@ def test_an_empty_out_is_refused(command, capsys, tmp_path, monkeypatch):
     args = {"resume": ["run", "--resume", "", "--quiet"]}.get(command, [command, "roll-up-2d", "--out", ""])
     assert main(args) == 2
     option = "--resume" if command == "resume" else "--out"
-    assert capsys.readouterr().err.strip().splitlines() == [f"rodfem: error: {option} must name a directory (got '')"]
+    assert rodfem_lines(capsys.readouterr().err) == [f"rodfem: error: {option} must name a directory (got '')"]
     assert (default / "summary.json").read_text() == "mine" and len(list((tmp_path / "results").iterdir())) == 1
 
 
@@ -122,7 +123,7 @@ def test_bad_input_from_the_shell_has_no_traceback(rodfem, tmp_path, setting, me
     """From the shell: exit code 2 and exactly the one line on stderr, no traceback."""
     p = rodfem("run", "cantilever-2d", "--set", setting, "--out", str(tmp_path))
     assert p.returncode == 2
-    assert p.stderr.strip().splitlines() == [message]
+    assert rodfem_lines(p.stderr) == [message]
 
 
 def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
@@ -130,7 +131,7 @@ def test_newton_failure_is_reported_and_keeps_results(rodfem, tmp_path):
     p = rodfem("run", "flying-spaghetti-2d", "--set", "t_end=1", "--quiet", "--out", str(out),
                env={"PETSC_OPTIONS": "-rodfem_snes_max_it 1"})
     assert p.returncode == 3
-    last = p.stderr.strip().splitlines()[-1]
+    last = rodfem_lines(p.stderr)[-1]
     assert "Newton failed at step 1" in last and "residual" in last and "Traceback" not in p.stderr
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "newton-failure" and s["failure"]["step"] == 1

@@ -2,7 +2,7 @@
 never a traceback (exit 1) with the summary left at "running" or "completed"."""
 import sys
 
-from processes import summary
+from processes import rodfem_lines, summary
 
 from rodfem.app.cli import main
 from rodfem.fem.assembly import BlockLayout
@@ -11,7 +11,7 @@ RUN = ["run", "flying-spaghetti-2d", "--set", "n_elements=4", "--set", "t_end=0.
 
 
 def one_line(err):
-    lines = err.strip().splitlines()
+    lines = rodfem_lines(err)
     assert len(lines) == 1, err
     return lines[0]
 

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import REPO, command, environment, history, ok, popen
+from processes import REPO, command, environment, history, ok, popen, rodfem_lines
 
 from rodfem import Support
 from rodfem.app.cli import main
@@ -93,7 +93,7 @@ def test_bad_resume_input(capsys, tmp_path):
     def one_line_error(args, *words):
         capsys.readouterr()
         assert main(args) == 2
-        lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+        lines = rodfem_lines(capsys.readouterr().err)
         assert len(lines) == 1 and all(w in lines[0] for w in words), lines
     empty = tmp_path / "empty"
     empty.mkdir()
@@ -155,7 +155,7 @@ def test_a_refused_resume_keeps_the_record(case, capsys, tmp_path):
         swap_arrays(run, tmp_path / "other")
     capsys.readouterr()
     assert main(["run", "--resume", str(run), *(["--set", "t_end=0.1"] if case != "wrong-shape" else [])]) == 2
-    lines = capsys.readouterr().err.strip().splitlines()
+    lines = rodfem_lines(capsys.readouterr().err)
     assert len(lines) == 1 and ("is before the checkpoint's time" in lines[0] or "does not fit" in lines[0]), lines
     assert record(run) == kept
 
@@ -174,7 +174,7 @@ def test_a_checkpoint_copied_from_another_run_is_refused(other, capsys, tmp_path
     shutil.copy(source / "checkpoint.npz", run / "checkpoint.npz")
     capsys.readouterr()
     assert main(["run", "--resume", str(run), "--set", "t_end=1"]) == 2
-    lines = capsys.readouterr().err.strip().splitlines()
+    lines = rodfem_lines(capsys.readouterr().err)
     assert len(lines) == 1 and "copied from another run?" in lines[0], lines
     assert ("scene roll-up-2d" if other == "another-scene" else "EA = 5000.0") in lines[0]
     assert record(run) == kept

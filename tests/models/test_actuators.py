@@ -10,7 +10,7 @@ equality with the unactuated rod.  Every run is small (4-16 elements).
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import ok, rodfem, summary
+from processes import ok, rodfem, rodfem_lines, summary
 
 from rodfem import Load, Problem, Support, run
 from rodfem.analysis.statics import Statics
@@ -303,7 +303,7 @@ def test_cli_bad_input_one_line(rodfem):
             args += ["--set", s]
         out = rodfem(*args)
         assert out.returncode == 2, out.stderr
-        lines = out.stderr.strip().splitlines()
+        lines = rodfem_lines(out.stderr)
         assert len(lines) == 1 and what in lines[0], out.stderr
 
 

@@ -9,7 +9,7 @@ penetration below the stated tolerance, mpirun -n 2 = serial, one-line parameter
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import assert_same_rows, script_on_ranks
+from processes import assert_same_rows, rodfem_lines, script_on_ranks
 
 from rodfem import run
 from rodfem.demos.capstan import capstan_ratio, discrete_ratio, regularized_ratio, scene
@@ -124,5 +124,5 @@ def test_bad_parameter_cli(rodfem, tmp_path):
     """`rodfem run capstan` with a wrap angle out of range: exit 2, one line naming the parameter."""
     out = rodfem("run", "capstan", "--set", "theta=200", "--out", str(tmp_path / "x"))
     assert out.returncode == 2
-    lines = out.stderr.strip().splitlines()
+    lines = rodfem_lines(out.stderr)
     assert len(lines) == 1 and "parameter 'theta' must be a number in (0, 180]" in lines[0]

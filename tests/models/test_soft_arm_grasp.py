@@ -8,7 +8,7 @@ tendon's forces are internal) -- without and with friction; mpirun -n 2 = serial
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import assert_same_rows, script_on_ranks
+from processes import assert_same_rows, rodfem_lines, script_on_ranks
 
 from rodfem import run
 from rodfem.demos.soft_arm_grasp import scene
@@ -96,5 +96,5 @@ def test_bad_parameter_cli(rodfem, tmp_path):
     """`rodfem run soft-arm-grasp` with the tendon outside the section: exit 2, one line naming the parameter."""
     out = rodfem("run", "soft-arm-grasp", "--set", "offset=0.02", "--out", str(tmp_path / "x"))
     assert out.returncode == 2
-    lines = out.stderr.strip().splitlines()
+    lines = rodfem_lines(out.stderr)
     assert len(lines) == 1 and "parameter 'offset' must be in (0, radius = 0.01)" in lines[0]

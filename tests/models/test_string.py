@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import ufl
 from mpi4py import MPI
-from processes import serial_and_parallel
+from processes import rodfem_lines, serial_and_parallel
 from ufl.algorithms import expand_derivatives
 
 from rodfem import Load, Problem, Support, run
@@ -340,7 +340,7 @@ def test_bad_material_parameters_model():
 def test_bad_parameter_cli(rodfem, tmp_path):
     out = rodfem("run", "hanging-cable", "--set", "EA=-1", "--out", str(tmp_path / "x"))
     assert out.returncode == 2
-    lines = out.stderr.strip().splitlines()
+    lines = rodfem_lines(out.stderr)
     assert len(lines) == 1 and "parameter 'EA' must be a number > 0" in lines[0]
 
 

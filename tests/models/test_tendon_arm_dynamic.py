@@ -10,7 +10,7 @@ first mode (log decrement, omega_1 from the linearization).
 import numpy as np
 import pytest
 from mpi4py import MPI
-from processes import ok, summary
+from processes import ok, rodfem_lines, summary
 
 from rodfem import run
 from rodfem.analysis.linearize import Linearization, natural_modes
@@ -112,7 +112,7 @@ def test_bad_input_is_one_line(capsys):
         capsys.readouterr()
         assert main(["run", "tendon-arm-dynamic", "--set", f"{name}={value}", "--set", "t_end=0.02",
                      "--quiet"]) == 2
-        err = capsys.readouterr().err.strip().splitlines()
+        err = rodfem_lines(capsys.readouterr().err)
         assert len(err) == 1 and what in err[0], err
 
 
