@@ -16,7 +16,7 @@ from rodfem.analysis.statics import solve as static_solve
 from rodfem.app.scene import load, scenes
 from rodfem.demos import _pendulum_reference as pendulum
 from rodfem.demos import tensegrity
-from rodfem.demos._multibody import nodal, rod_inertia
+from rodfem.demos._multibody import nodal
 
 COMM = MPI.COMM_WORLD
 
@@ -54,7 +54,8 @@ def chain_error(N, dt, t_end=0.4):
     """|tip(t_end) - tip_ref(t_end)| of the N-link chain at the step dt."""
     _, p, res = simulate("chain-1000", n_links=N, dt=dt, t_end=t_end)
     l, m = p["L"] / N, p["mass"] / N
-    J = rod_inertia(m, l, p["slenderness"] * l)[1]
+    r = p["slenderness"] * l
+    J = m * (l * l / 12.0 + r * r / 4.0)   # a solid cylinder about a transverse axis through its centre
     tip, _ = pendulum.falling_chain(N, p["L"], p["mass"], J, p["g"], [t_end])
     return np.hypot(res.column("tip_x")[-1] - tip[0, 0], res.column("tip_z")[-1] - tip[0, 1])
 
