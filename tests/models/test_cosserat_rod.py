@@ -14,6 +14,7 @@ from rodfem import run
 from rodfem.demos import flying_spaghetti_3d, helix_3d, roll_up_3d, whirling_rod_3d
 from rodfem.demos._rod3d import orthonormality_error
 from rodfem.errors import ParameterError
+from rodfem.fem.jit import compile_forms
 from rodfem.forms.cosserat_rod import director_masses
 
 COMM = MPI.COMM_WORLD
@@ -35,7 +36,7 @@ class Recorder:
 
 
 def integral(problem, expr):
-    return problem.comm.allreduce(fem.assemble_scalar(fem.form(expr * problem.dx)), op=MPI.SUM)
+    return problem.comm.allreduce(fem.assemble_scalar(compile_forms({"f": expr * problem.dx})["f"]), op=MPI.SUM)
 
 
 def tip_error(row, ref):

@@ -19,6 +19,7 @@ from rodfem import Load, Support, System, run
 from rodfem.core.bodycontact import BodyContacts, close_pairs
 from rodfem.demos.rod_collision import scene, straight
 from rodfem.errors import InputError
+from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import Coulomb, stiffness_for
 from rodfem.forms.rod_contact import RodContact
@@ -113,9 +114,9 @@ def motion(name):
         if not forms:
             x = body.space.split(body.x1)
             rhoA = body.model.rhoA
-            forms.update({k: fem.form(f) for k, f in body.momentum_forms(x).items()})
-            forms["m"] = fem.form(rhoA * body.dx)
-            forms.update({f"c_{c}": fem.form(rhoA * x["r"][i] * body.dx) for i, c in enumerate("xyz")})
+            ufl_forms = dict(body.momentum_forms(x), m=rhoA * body.dx)
+            ufl_forms.update({f"c_{c}": rhoA * x["r"][i] * body.dx for i, c in enumerate("xyz")})
+            forms.update(compile_forms(ufl_forms))
         val = {k: fem.assemble_scalar(f) for k, f in forms.items()}
         c, p = (np.array([val[f"{q}_{a}"] / (val["m"] if q == "c" else 1.0) for a in "xyz"]) for q in "cp")
         Lc = np.array([val[f"L_{a}"] for a in "xyz"]) - np.cross(c, p)
