@@ -8,7 +8,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from rodfem.fem import compat
+from rodfem.fem.jit import compile_forms
 from rodfem.forms.string import relaxed, set_state
 from rodfem.nls.newton import Newton
 
@@ -53,8 +53,8 @@ def static_equilibrium(problem, t=0.0, supports=None, options=None):
             sub = Vr if not comp else Vr.sub(int(comp))
             dofs = fem.locate_dofs_topological(sub, 0, problem.facets[sup.end])
             bcs.append(fem.dirichletbc(r0, dofs))
-    newton = Newton(compat.form(F), compat.form(ufl.derivative(F, r)), r, bcs,
-                    options=options, prefix="rodfem_static_")
+    compiled = compile_forms({"F": F, "J": ufl.derivative(F, r)})   # under the JIT cache lock
+    newton = Newton(compiled["F"], compiled["J"], r, bcs, options=options, prefix="rodfem_static_")
     solve = newton.solve(0, t)
     problem.x0.x.array[rdofs] = r.x.array
     S.assign(problem.x0, "v", lambda x: np.zeros((3, x.shape[1])))

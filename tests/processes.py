@@ -2,6 +2,7 @@
 `mpirun -n np` (always inside `timeout`, so that a rank left waiting cannot hang the suite), and
 reading back what a run wrote (history.csv, summary.json)."""
 import csv
+import fcntl
 import json
 import os
 import shutil
@@ -151,3 +152,13 @@ class tight_newton:
     def __exit__(self, *exc):
         self.opts.delValue("rodfem_snes_atol")
         self.opts.delValue("rodfem_snes_rtol")
+
+
+def holding_the_lock(cache):
+    """Hold CACHE/fenics/rodfem-jit.lock as a compiling run would (its pid written in); the open file."""
+    os.makedirs(cache / "fenics", exist_ok=True)
+    lock = open(cache / "fenics" / "rodfem-jit.lock", "w")
+    fcntl.flock(lock, fcntl.LOCK_EX)
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
+    return lock

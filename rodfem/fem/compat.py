@@ -332,6 +332,25 @@ def jit_cache_dir():
     return Path(options["cache_dir"])
 
 
+def hook_jit_compilers(around):
+    """Replace each of ffcx's JIT entry points (``codegeneration.jit.compile_forms``,
+    ``compile_expressions``, and 0.5's ``compile_elements``, ``compile_coordinate_maps``) by
+    around(entry_point); DOLFINx calls them through the module, so every compilation goes through
+    the wrappers.  Returns the names replaced."""
+    import ffcx.codegeneration.jit as ffcx_jit
+    names = []
+    for name in ("compile_forms", "compile_expressions", "compile_elements", "compile_coordinate_maps"):
+        entry = getattr(ffcx_jit, name, None)
+        if entry is None:
+            continue
+        entry = getattr(entry, "rodfem_hook", entry)
+        wrapped = around(entry)
+        wrapped.rodfem_hook = entry
+        setattr(ffcx_jit, name, wrapped)
+        names.append(name)
+    return names
+
+
 def hook_jit_lookup(before):
     """Have ffcx call before(module_name, cache_dir) each time it looks a module up in the JIT cache
     (where it either loads a compiled module or claims it and compiles): ffcx's

@@ -15,7 +15,10 @@ is not held up by another run compiling (or stopped, or stuck).  A NAME.c
 without NAME.c.cached found while holding the lock was left by a compilation
 that died, and is removed, so ffcx compiles it afresh (so is a NAME.c.cached
 whose NAME.c is gone).  The lock also makes a second run wait for a first one
-compiling the same forms instead of timing out.  (A program other than rodfem
+compiling the same forms instead of timing out.  A form compiled outside such a
+block (a demo or a test calling dolfinx.fem.form itself) is compiled under the
+lock too: ffcx's JIT entry points are wrapped in `locked(COMM_SELF)`
+(rodfem.fem.compat.hook_jit_compilers).  (A program that does not import rodfem
 compiling into the same cache at the same moment is not covered: give it its
 own XDG_CACHE_HOME.)
 
@@ -36,6 +39,8 @@ import os
 import sys
 import time
 from contextlib import contextmanager
+
+from mpi4py import MPI
 
 from rodfem.common import interrupts
 from rodfem.errors import InputError, Interrupted, agreed
@@ -234,6 +239,19 @@ def locked(comm):
         if outer and _held["fd"] is not None:
             os.close(_held["fd"])  # releases the lock
             _held["fd"] = None
+
+
+def _under_lock(entry):
+    """ffcx's JIT entry point `entry`, run inside `locked(COMM_SELF)`: a compilation outside a
+    rodfem block (which would race another process holding the lock) takes the lock too."""
+    @functools.wraps(entry)
+    def compile_locked(*args, **kwargs):
+        with locked(MPI.COMM_SELF):
+            return entry(*args, **kwargs)
+    return compile_locked
+
+
+COMPILERS = compat.hook_jit_compilers(_under_lock)
 
 
 def _agree(comm, error):

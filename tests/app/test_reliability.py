@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import REPO, RODFEM, command, environment, popen, rodfem, rodfem_lines, summary
+from processes import REPO, RODFEM, command, environment, holding_the_lock, popen, rodfem, rodfem_lines, summary
 
 from rodfem.app.cli import main
 
@@ -330,16 +330,6 @@ def test_the_jit_cache_survives_interrupts_and_reports_damage(tmp_path):
     # a cache that cannot be created
     p = rodfem("run", *RU, "--out", out, timeout=120, env={"XDG_CACHE_HOME": os.path.join(out, "summary.json")})
     assert p.returncode == 2 and "set XDG_CACHE_HOME to a writable directory" in one_line(p.stderr)
-
-
-def holding_the_lock(cache):
-    """Hold CACHE/fenics/rodfem-jit.lock as a compiling run would (its pid written in); the open file."""
-    os.makedirs(cache / "fenics", exist_ok=True)
-    lock = open(cache / "fenics" / "rodfem-jit.lock", "w")
-    fcntl.flock(lock, fcntl.LOCK_EX)
-    lock.write(f"{os.getpid()}\n")
-    lock.flush()
-    return lock
 
 
 def test_a_held_jit_cache_lock(tmp_path):

@@ -63,3 +63,26 @@ def test_compilation_logs_nothing_through_the_python_api(caplog):
         assert logging.root.manager.disable == logging.WARNING
     finally:
         logging.disable(logging.NOTSET)
+
+
+def test_a_form_compiled_outside_rodfem_waits_for_the_lock(tmp_path):
+    """A form compiled with dolfinx.fem.form itself (a demo's helper, a test), in a process that imported
+    rodfem, takes the cache lock too: while another process holds it, it says so and waits (it
+    compiled beside the holder, which took its unfinished source for a dead compilation's and removed
+    it: 'cc1: fatal error: libffcx_forms_....c: No such file or directory', seen with two test workers)."""
+    import subprocess
+    import sys
+
+    from processes import environment, holding_the_lock
+    code = ("import rodfem, ufl\nfrom dolfinx import fem, mesh\nfrom mpi4py import MPI\n"
+            "m = mesh.create_unit_interval(MPI.COMM_SELF, 3)\n"
+            "V = fem.FunctionSpace(m, ('DG', 0)) if hasattr(fem, 'FunctionSpace') else fem.functionspace(m, ('DG', 0))\n"
+            "u = fem.Function(V)\n"
+            "fem.form(u * u * ufl.dx)\nprint('compiled')\n")
+    env = environment(XDG_CACHE_HOME=str(tmp_path), RODFEM_JIT_LOCK_TIMEOUT="1")
+    with holding_the_lock(tmp_path):
+        p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+    assert p.returncode != 0 and "compiled" not in p.stdout, p.stdout + p.stderr[-2000:]
+    assert "rodfem: waiting for the JIT cache lock" in p.stderr and "is still held by" in p.stderr
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+    assert p.returncode == 0 and p.stdout.strip() == "compiled", p.stderr[-2000:]
