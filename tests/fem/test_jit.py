@@ -76,7 +76,7 @@ def test_a_form_compiled_outside_rodfem_waits_for_the_lock(tmp_path):
     from processes import environment, holding_the_lock
     code = ("import rodfem, ufl\nfrom dolfinx import fem, mesh\nfrom mpi4py import MPI\n"
             "m = mesh.create_unit_interval(MPI.COMM_SELF, 3)\n"
-            "V = fem.FunctionSpace(m, ('DG', 0)) if hasattr(fem, 'FunctionSpace') else fem.functionspace(m, ('DG', 0))\n"
+            "from rodfem.fem import compat\nV = compat.functionspace(m, compat.element('DG', m, 0))\n"
             "u = fem.Function(V)\n"
             "fem.form(u * u * ufl.dx)\nprint('compiled')\n")
     env = environment(XDG_CACHE_HOME=str(tmp_path), RODFEM_JIT_LOCK_TIMEOUT="1")
