@@ -48,7 +48,7 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-from rodfem.core.joints import Point, quadratic_form
+from rodfem.core.joints import Point, QuadraticForms, point_kind
 from rodfem.errors import ConstraintError
 
 COMPLEX_STEP = 1e-30
@@ -128,8 +128,9 @@ class Component:
     def describe(self):
         return f"{self.name} ({self.a.describe()} - {self.b.describe()})"
 
-    def bind(self, frame_a, frame_b, qa0, qb0, scale, rule):
-        """Fix the quadratic form xi(q) = 1/2 q.Q_k q + c_k.q + e_k, q = (q_a, q_b)."""
+    def bind(self, frame_a, frame_b, qa0, qb0, scale, rule, forms=None):
+        """Fix the quadratic form xi(q) = 1/2 q.Q_k q + c_k.q + e_k, q = (q_a, q_b) (found by `forms`, a
+        QuadraticForms, when given)."""
         na, qa0, qb0 = len(qa0), np.asarray(qa0, float), np.asarray(qb0, float)
         a0, b0 = frame_a(qa0), frame_b(qb0)
         self.frames, self.na, self.rule = (frame_a, frame_b), na, rule
@@ -144,7 +145,8 @@ class Component:
             raise ConstraintError(f"{self.describe()} does not fit points that have "
                                   f"{a0.kind} and {b0.kind} ({err})") from None
         try:
-            self.Q, self.c, self.e = quadratic_form(xi, na + len(qb0), scale)
+            self.Q, self.c, self.e = (forms or QuadraticForms()).find(
+                xi, np.concatenate([qa0, qb0]), scale, key=(self.measure, na, point_kind(self.a), point_kind(self.b)))
         except ConstraintError as err:
             raise ConstraintError(f"{self.describe()}: its measure {err}") from None
         self.m = len(self.e)

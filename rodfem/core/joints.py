@@ -108,6 +108,58 @@ def quadratic_form(g, n, scale=1.0):
     return Q, c, e
 
 
+class QuadraticForms:
+    """The quadratic forms found while a System is bound, reused for a function that is a known one
+    shifted: many equal joints (a chain's hinges, a net's knots) cost a few evaluations each, not
+    the polarization's (n + 1)(n + 2)/2.
+
+    For a function g' of the same `key` (the same constraint between the same kinds of points) with
+    initial coordinates q0' = q0 + T, the candidate is the known form moved by T,
+
+        g'(q) = g(q - T):   Q' = Q,  c'_k = c_k - Q_k T,  e'_k = e_k - c_k.T + 1/2 T.Q_k T,
+
+    accepted only if it equals g' at q0' and at two random points: two different quadratics agree
+    at a random point with probability zero (their difference is a nonzero polynomial), so an
+    accepted candidate is g' itself; otherwise g' is polarized afresh (and becomes the known one)."""
+
+    def __init__(self):
+        self.known = {}
+
+    def find(self, g, q0, scale=1.0, key=None):
+        """(Q, c, e) of g (quadratic in n = len(q0) coordinates) by `quadratic_form`, or moved from the
+        last form found for `key`."""
+        q0, s = np.asarray(q0, dtype=float), float(scale)
+        if key is not None and key in self.known:
+            (Q, c, e), known_q0 = self.known[key]
+            if known_q0.shape == q0.shape:
+                T = q0 - known_q0
+                QT = np.einsum("kij,j->ki", Q, T)
+                moved = (Q, c - QT, e - c @ T + 0.5 * QT @ T)
+                rng = np.random.default_rng(len(self.known))
+                if all(_agrees(g, moved, q, s) for q in (q0, q0 + s * rng.standard_normal(q0.shape),
+                                                         q0 + s * rng.standard_normal(q0.shape))):
+                    return moved
+        form = quadratic_form(g, len(q0), s)
+        if key is not None:
+            self.known[key] = (form, q0)
+        return form
+
+
+def point_kind(p):
+    """What a point contributes to a QuadraticForms key: its body's model, place and offset (the
+    ground's: its position and axes)."""
+    return (None if p.body is None else id(p.body.body.model), p.where, p.offset, p.s)
+
+
+def _agrees(g, form, q, scale):
+    """Whether the quadratic form (Q, c, e) equals g at q (to the tolerance of `quadratic_form`'s check)."""
+    Q, c, e = form
+    exact = np.atleast_1d(g(q))
+    model = 0.5 * np.einsum("i,kij,j->k", q, Q, q) + c @ q + e
+    return exact.shape == model.shape and bool(
+        np.max(np.abs(exact - model), initial=0.0) <= 1e-9 * max(1.0, np.max(np.abs(exact), initial=0.0), scale ** 2))
+
+
 class Joint:
     """g(frame_a, frame_b, a0, b0) = drive(t) between points a and b (a0, b0: their initial frames).
 
@@ -119,8 +171,9 @@ class Joint:
         self.constraint, self.a, self.b, self.drive = constraint, a, b, drive
         self.name = name or getattr(constraint, "__name__", "joint")
 
-    def bind(self, frame_a, frame_b, qa0, qb0, scale):
-        """Fix the quadratic form of g(q), q = (q_a, q_b), from the frame builders and q(0)."""
+    def bind(self, frame_a, frame_b, qa0, qb0, scale, forms=None):
+        """Fix the quadratic form of g(q), q = (q_a, q_b), from the frame builders and q(0) (found by
+        `forms`, a QuadraticForms, when given: the System's, shared by its joints)."""
         na, qa0, qb0 = len(qa0), np.asarray(qa0, float), np.asarray(qb0, float)
         a0, b0 = frame_a(qa0), frame_b(qb0)
 
@@ -135,7 +188,8 @@ class Joint:
             kinds = " and ".join(f.kind for f in (a0, b0))
             raise ConstraintError(f"{where} does not fit points that have {kinds} ({err})") from None
         try:
-            self.Q, self.c, self.e = quadratic_form(g, na + len(qb0), scale)
+            key = (self.constraint, na, point_kind(self.a), point_kind(self.b))
+            self.Q, self.c, self.e = (forms or QuadraticForms()).find(g, np.concatenate([qa0, qb0]), scale, key)
         except ConstraintError as err:
             raise ConstraintError(f"{where} {err}") from None
         self.size = len(self.e)
@@ -207,9 +261,9 @@ class MovingGround(Joint):
                                   f"(got {x}, {R} at t = {t:g})")
         return np.concatenate([x, R[:, 0], R[:, 1], R[:, 2]])
 
-    def bind(self, frame_a, frame_b, qa0, qb0, scale):
-        """The quadratic form of g over (p, q); Q, c, e of the base class: the form in q at p(0) (what the
-        checks at the start see)."""
+    def bind(self, frame_a, frame_b, qa0, qb0, scale, forms=None):
+        """The quadratic form of g over (p, q) (polarized: `forms` is not used); Q, c, e of the base
+        class: the form in q at p(0) (what the checks at the start see)."""
         p0 = self.frame_coordinates(0.0)
         fixed = frame_a(qa0)
         if np.max(np.abs(p0 - np.concatenate([fixed.x, *fixed.d]))) > 1e-12 * max(scale, 1.0):

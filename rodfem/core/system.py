@@ -24,6 +24,7 @@ The time loop's view (rodfem/core/model.py, `SteppedSystem`): `t`, `dt`, `comm`,
 from typing import Callable, Optional
 
 import numpy as np
+import scipy.sparse as sp
 from dolfinx import fem
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
@@ -35,7 +36,7 @@ from rodfem.core.bodycontact import CLEARANCE, BodyContacts, check_centre, check
 from rodfem.core.components import Law
 from rodfem.core.joint_batch import JointBatch, batchable
 from rodfem.core.joint_ranks import RankJoints
-from rodfem.core.joints import Frame, Joint, MovingGround, Point
+from rodfem.core.joints import Frame, Joint, MovingGround, Point, QuadraticForms
 from rodfem.core.kinds import Meshes, kind, shareable, twin_forms
 from rodfem.core.placement import Placement, here, owners, share_points
 from rodfem.core.servo import Servo, start_multipliers
@@ -44,6 +45,7 @@ from rodfem.errors import ConstraintError, NewtonFailure
 from rodfem.fem.assembly import BlockAssembler, BlockLayout, BodyBlock, RankLayout, allreduce_max, allreduce_sum
 from rodfem.fem.batch import Functionals, Segments
 from rodfem.fem.jit import compile_forms
+from rodfem.la.rank import row_rank
 from rodfem.nls.newton import Newton, Solve
 
 
@@ -290,7 +292,7 @@ class System:
             templates = {n: t for n, t in templates.items() if t.name not in alone}
         self.kinds = {n: t.name for n, t in templates.items()}   # body -> the body whose compiled forms it shares
         self._shared = self._share_points() if self.distributed else None
-        size = 0
+        size, self._quadratic_forms = 0, QuadraticForms()   # (equal joints and components: polarized once)
         for j in self.joints:
             j.offset = size
             size += self._bind(j)
@@ -451,7 +453,7 @@ class System:
             if isinstance(joint, Servo):   # many points
                 joint.bind(frames, q0s, scale)
             else:
-                joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale)
+                joint.bind(frames[0], frames[1], q0s[0], q0s[1], scale, forms=self._quadratic_forms)
         except ConstraintError:
             raise
         except (ValueError, TypeError, IndexError) as err:   # e.g. an offset on a point that has none
@@ -463,7 +465,7 @@ class System:
         sides, frames, q0s, scale = self._frames(component)
         component.sides = sides
         try:
-            component.bind(frames[0], frames[1], q0s[0], q0s[1], scale, self.integrator)
+            component.bind(frames[0], frames[1], q0s[0], q0s[1], scale, self.integrator, forms=self._quadratic_forms)
         except ConstraintError:
             raise
         except (ValueError, TypeError, IndexError) as err:
@@ -919,15 +921,16 @@ class PointIndex:
             for members in coupled(free):   # (G is block diagonal over the joints sharing no velocity)
                 cols = sorted({g for m in members for g in free[m]})
                 where = {g: k for k, g in enumerate(cols)}
-                G = np.zeros((sum(self.joints[m].size for m in members), len(cols)))
-                r = 0
+                entries, r = [], 0
                 for m in members:
-                    for k, g in enumerate(free[m]):
-                        G[r:r + self.joints[m].size, where[g]] += blocks[m][:, k]
-                    r += self.joints[m].size
-                sv = np.linalg.svd(G, compute_uv=False) if G.size else np.zeros(0)
-                rank += int(np.sum(sv > 1e-10 * max(sv.max(initial=0.0), 1.0)))
-                rows += G.shape[0]
+                    size = self.joints[m].size
+                    i, k = np.meshgrid(np.arange(r, r + size), np.arange(len(free[m])), indexing="ij")
+                    entries.append((i.ravel(), np.array([where[g] for g in free[m]], dtype=np.int64)[k.ravel()],
+                                    blocks[m].ravel()))
+                    r += size
+                i, k, value = (np.concatenate(e) for e in zip(*entries))
+                rank += row_rank(sp.coo_matrix((value, (i, k)), shape=(r, len(cols))))   # (duplicates summed)
+                rows += r
             if rank < rows:
                 names = ", ".join(j.name for j in self.joints)
                 bad = (f"the joints ({names}) impose {rows} conditions of which only {rank} are "
