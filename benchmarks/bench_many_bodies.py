@@ -5,6 +5,8 @@
     .venv/bin/python benchmarks/bench_many_bodies.py --small --before CHECKOUT [--repeats 5]
                                                     # -> benchmarks/small_steps.csv, the small-step
                                                     #    tables of many_bodies.md and small_steps.md
+    .venv/bin/python benchmarks/bench_many_bodies.py --rigid [--before CHECKOUT]
+                                                    # -> the chain-1000 scene's table of many_bodies.md
 
 A hanging chain of N planar steel beams pinned end to end (the first pinned to the ground), 128
 elements in total (N = 256, 1000: one element per beam), falling from horizontal under gravity:
@@ -63,6 +65,11 @@ def measure(case, batch, repeats=3):
     kind, arg, n, steps = case
     if kind == "chain":
         make, dt = (lambda: chain(arg)), 1e-3
+    elif kind == "links":
+        from rodfem.app.scene import load
+        scene = load("chain-1000")
+        p = scene.values({"n_links": arg})
+        make, dt = (lambda: scene.build(p, MPI.COMM_WORLD)), p["dt"]
     else:
         from rodfem.app.scene import load
         scene = load(arg)
@@ -88,11 +95,12 @@ def measure(case, batch, repeats=3):
     return best
 
 
-def child(case, batch, checkout):
+def child(case, batch, checkout, repeats=None):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([checkout, HERE]), OMP_NUM_THREADS="1")
     code = (f"import json, sys; sys.path.insert(1, {HERE!r}); from bench_many_bodies import measure; "
             "import rodfem; assert rodfem.__file__.startswith(sys.argv[1]), rodfem.__file__; "
-            f"print('RESULT', json.dumps(measure({tuple(case)!r}, {batch!r}, {2 if case[1] == 1000 else 3})))")
+            f"print('RESULT', json.dumps(measure({tuple(case)!r}, {batch!r}, "
+            f"{repeats or (2 if case[1] == 1000 else 3)})))")
     # (run in the checkout: `python -c` puts the working directory first on the path)
     out = subprocess.run([sys.executable, "-c", code, checkout], env=env, capture_output=True, text=True, check=True,
                          cwd=checkout)
@@ -128,11 +136,15 @@ def main():
     ap.add_argument("--small", action="store_true", help="only the small scenes, this checkout and --before in turn, "
                     "--repeats processes each: medians (the small-step tables)")
     ap.add_argument("--repeats", type=int, default=5, help="--small: processes per case and checkout")
-    ap.add_argument("--before-name", help="--small: what --before is, for the table's note (default: its path)")
+    ap.add_argument("--before-name", help="--small, --rigid: what --before is, for the table's note (default: its path)")
+    ap.add_argument("--rigid", action="store_true", help="only the chain-1000 scene (rigid links on revolute joints): "
+                    "build time and ms/step at 16 to 1000 links")
     args = ap.parse_args()
     from report import write_report
     if args.small:
         return small(args.before, args.repeats, args.before_name)
+    if args.rigid:
+        return rigid(args.before, args.before_name)
     if args.tables:
         import csv
         with open(os.path.join(HERE, "many_bodies.csv")) as fh:
@@ -205,12 +217,38 @@ def small(before, repeats, name=None):
     print("\n".join(lines))
 
 
-def _replace_section(path, lines, heading):
-    """The lines between SMALL_START and SMALL_END of the file at path replaced (if they are not there: the
+RIGID_START, RIGID_END = "<!-- rigid: written by bench_many_bodies.py --rigid -->", "<!-- /rigid -->"
+
+
+def rigid(before, name=None):
+    """The chain-1000 scene at 16-1000 links: build CPU s (a build after the first of the process) and CPU
+    ms/step (the better of two 5-step runs), this checkout and `before` (one run each at 1000 links)."""
+    codes = [("now", ROOT)] + ([("before", os.path.abspath(before))] if before else [])
+    lines = [RIGID_START, "", "## Rigid links: the chain-1000 scene", "",
+             f"The chain-1000 scene (rigid links on revolute joints, forms/joints.py), 5 steps of its h = 5 ms; build: "
+             f"CPU s of a build after the first of the process (JIT cache warm), ms/step: CPU time.  Load average "
+             f"{os.getloadavg()[0]:.1f} on 2 cores.  now: this checkout; before: {name or before}.", "",
+             "| links | " + " | ".join(f"build s {c} | ms/step {c}" for c, _ in codes) + " |",
+             "|---|" + "---|---|" * len(codes)]
+    for N in (16, 64, 256, 1000):
+        cells = []
+        for label, checkout in codes:
+            r = child(("links", N, None, 5), True, checkout, repeats=1 if N == 1000 else 3)
+            print(N, label, r, flush=True)
+            cells += [f"{r['build_s']:.2f}", f"{r['ms_per_step']:.2f}"]
+        lines.append(f"| {N} | " + " | ".join(cells) + " |")
+    lines += ["", RIGID_END]
+    _replace_section(os.path.join(HERE, "many_bodies.md"), lines, None, (RIGID_START, RIGID_END))
+    print("\n".join(lines))
+
+
+def _replace_section(path, lines, heading, markers=(SMALL_START, SMALL_END)):
+    """The lines between the `markers` of the file at path replaced (if they are not there: the
     section under `heading` up to the next one, or the end of the file)."""
     text = open(path).read().split("\n") if os.path.exists(path) else []
-    if SMALL_START in text:
-        a, b = text.index(SMALL_START), text.index(SMALL_END) + 1
+    start, end = markers
+    if start in text:
+        a, b = text.index(start), text.index(end) + 1
     elif heading in text:
         a = text.index(heading) + 2
         b = next((i for i in range(a, len(text)) if text[i].startswith("## ")), len(text)) - 1

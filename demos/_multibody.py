@@ -2,6 +2,7 @@
 # on every rank, the frame of a rigid body and the orthonormality of directors
 # (for history columns added with System.record).
 import numpy as np
+from mpi4py import MPI
 
 from rodfem.forms.cosserat_rod import DIRECTORS
 
@@ -25,10 +26,15 @@ def rigid_frame(body, state="x1"):
     return x, R
 
 
-def orthonormality(body, state="x1"):
-    """max |R^T R - I| over the nodes of a director-based body (rigid or rod), every rank."""
-    R = np.stack([nodal(body, d, state)[1] for d in DIRECTORS], axis=2)
-    return float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3))))
+def orthonormality(*bodies, state="x1"):
+    """max |R^T R - I| over the nodes of director-based bodies (rigid or rods) of one communicator,
+    every rank (each rank its own nodes, then one reduction)."""
+    worst = 0.0
+    for body in bodies:
+        R = np.stack([body.space.nodal(getattr(body, state), d)[1] for d in DIRECTORS], axis=2)
+        if len(R):
+            worst = max(worst, float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)))))
+    return bodies[0].comm.allreduce(worst, op=MPI.MAX)
 
 
 def rod_inertia(m, l, r):

@@ -236,13 +236,26 @@ class RigidSpace(StateSpace):
     rank that owns the cell (found with locate_dofs_topological on the subspace views)."""
 
     def field_dofs(self, name):
-        """Local dofs of field `name` in W, one per component (empty on the ranks without the cell)."""
+        """Local dofs of field `name` in W, one per component (empty on the ranks without the cell);
+        found once per field (a history column reads them every step)."""
+        known = self.__dict__.setdefault("_field_dofs", {})
+        if name not in known:
+            known[name] = self._locate_field_dofs(name)
+        return known[name]
+
+    def _locate_field_dofs(self, name):
         cells = np.arange(self.mesh.topology.index_map(self.mesh.topology.dim).size_local, dtype=np.int32)
         sub = self.sub(name)
         subs = [sub.sub(c) for c in range(self.field(name).size)] if self.field(name).shape else [sub]
         return np.concatenate([fem.locate_dofs_topological(V, self.mesh.topology.dim, cells) for V in subs])
 
     def _midpoint(self):
+        """The cell's midpoint [3, 1] (none where the cell is not owned); the mesh never moves: found once."""
+        if "_mid" not in self.__dict__:
+            self._mid = self._locate_midpoint()
+        return self._mid
+
+    def _locate_midpoint(self):
         x = self.mesh.geometry.x
         return (np.array([[0.5 * (x[:, 0].min() + x[:, 0].max())], [0.0], [0.0]]) if len(x)
                 else np.zeros((3, 0)))

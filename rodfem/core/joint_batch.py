@@ -15,6 +15,7 @@ all joints go into the matrix by one MatSetValues call per row in one petsc4py c
 The rows and columns of dofs fixed by supports are left out, as for a single joint.
 """
 import numpy as np
+import scipy.sparse as sp
 from petsc4py import PETSc
 
 from rodfem.core.joints import Joint
@@ -26,26 +27,53 @@ def batchable(joint) -> bool:
 
 
 class _Group:
-    """Joints with the same number of coordinates n and conditions m, stacked."""
+    """Joints with the same number of coordinates n and conditions m, stacked, with the entries that
+    can be nonzero only: Q is sparse (a revolute joint between rigid bodies, n = 24, m = 5: 30 of Q's
+    2880 coefficients), so its products are sparse matrix-vector products and each block of the step's
+    Jacobian keeps the entries where Q (and c) can make it nonzero:
+
+        d r_v/dq = 1/2 lambda.Q:   (a, b) with Q_kiab != 0 for some i
+        d r_v/dlambda = G^T, d r_lam/dv = 1/2 G:   (i, a) with Q_kiab != 0 for some b, or c_kia != 0
+        d r_lam/dq = 1/2 Q v_m:    (i, a) with Q_kiab != 0 for some b
+        d r_lam/dlambda = 0:       every (i, j) (explicit zeros: the LU's pivots)
+    """
 
     def __init__(self, joints, fixed, at=None, counted=None):
         self.joints = joints
-        self.Q = np.array([j.Q for j in joints])                        # [k, m, n, n]
+        Q = np.array([j.Q for j in joints])                             # [k, m, n, n]
         self.c = np.array([j.c for j in joints])                        # [k, m, n]
         self.e = np.array([j.e for j in joints])                        # [k, m]
+        k, m, n = self.c.shape
+        kk, ii, aa, bb = np.nonzero(Q)
+        values = Q[kk, ii, aa, bb]
+        # G = Q q + c as one sparse product: row (k, i, a), column (k, b)
+        self.QG = sp.csr_matrix((values, ((kk * m + ii) * n + aa, kk * n + bb)), shape=(k * m * n, k * n))
+        structure_vq = np.zeros((k, n, n), bool)
+        structure_vq[kk, aa, bb] = True
+        structure_q = np.zeros((k, m, n), bool)
+        structure_q[kk, ii, aa] = True
+        structure_G = structure_q | (self.c != 0)
+        # 1/2 lambda.Q at the entries of structure_vq: row (its place among them), column (k, i)
+        place = np.full(k * n * n, -1, dtype=np.int64)
+        place[np.flatnonzero(structure_vq)] = np.arange(int(structure_vq.sum()))
+        self.QL = sp.csr_matrix((0.5 * values, (place[(kk * n + aa) * n + bb], kk * m + ii)),
+                                shape=(int(structure_vq.sum()), k * m))
+        # (each block's entries: flat positions in the block [k, rows, cols])
+        self.structure = [np.flatnonzero(structure_vq), np.flatnonzero(structure_G.transpose(0, 2, 1)),
+                          np.flatnonzero(structure_q), np.flatnonzero(structure_G), np.arange(k * m * m)]
+        self.zeros = np.zeros(k * m * m)
         # positions in the gathered values (`at`: global indices -> positions; else the joints' own)
         self.q_at, self.v_at, self.lam_at = (
-            np.array([at(getattr(j, k + "_index")) if at else getattr(j, k + "_at") for j in joints], dtype=np.int64)
-            for k in ("q", "v", "lam"))
+            np.array([at(getattr(j, x + "_index")) if at else getattr(j, x + "_at") for j in joints], dtype=np.int64)
+            for x in ("q", "v", "lam"))
         # the joints whose supplied work is summed here (a joint computed on two ranks counts on one)
         self.counted = np.ones(len(joints), bool) if counted is None else np.asarray(counted, bool)
         self.q_index = np.array([j.q_index for j in joints], dtype=np.int64)   # global indices
         self.v_index = np.array([j.v_index for j in joints], dtype=np.int64)
         self.lam_index = np.array([j.lam_index for j in joints], dtype=np.int64)
-        self.driven = [k for k, j in enumerate(joints) if j.drive is not None]
+        self.driven = [x for x, j in enumerate(joints) if j.drive is not None]
         free_v = ~np.isin(self.v_index, fixed)
         free_q = ~np.isin(self.q_index, fixed)
-        m = self.e.shape[1]
         every = np.ones_like(self.lam_index, dtype=bool)
         # (rows, cols, kept) of each block, in the order of `blocks`
         self.layout = [(self.v_index, self.q_index, free_v, free_q),       # d r_v / d q
@@ -56,42 +84,46 @@ class _Group:
         self.free_v, self.m = free_v, m
 
     def entries(self):
-        """(rows, cols, kept mask) of every block, flattened."""
+        """(rows, cols, kept mask) of every block's entries that can be nonzero, flattened (in the
+        order of the values `step` gives)."""
         out = []
-        for rows, cols, keep_r, keep_c in self.layout:
+        for (rows, cols, keep_r, keep_c), where in zip(self.layout, self.structure):
             R = np.broadcast_to(rows[:, :, None], rows.shape + (cols.shape[1],))
             C = np.broadcast_to(cols[:, None, :], R.shape)
             keep = keep_r[:, :, None] & keep_c[:, None, :]
-            out.append((R.ravel(), C.ravel(), keep.ravel()))
+            out.append((R.ravel()[where], C.ravel()[where], keep.ravel()[where]))
         return out
 
     def prescribed(self, t):
         """g_p(t) of every joint [k, m] (zero for the joints without a drive)."""
         gp = np.zeros(self.e.shape)
-        for k in self.driven:
-            gp[k] = self.joints[k].prescribed(t)
+        for x in self.driven:
+            gp[x] = self.joints[x].prescribed(t)
         return gp
 
+    def G(self, q):
+        """G(q) = Q q + c of every joint [k, m, n] (q: [k, n])."""
+        return (self.QG @ q.ravel()).reshape(self.c.shape) + self.c
+
     def step(self, v0, v1, h, t0, t1):
-        """The terms of the step: (r_v [k, n], r_lam [k, m], blocks (list of [k, r, c]), work)."""
+        """The terms of the step: (r_v [k, n], r_lam [k, m], blocks (each block's values at its
+        entries, flat), work)."""
         q0, q1 = v0[self.q_at], v1[self.q_at]
         qm, vm = 0.5 * (q0 + q1), 0.5 * (v0[self.v_at] + v1[self.v_at])
         lam = v1[self.lam_at]
-        G = np.einsum("kiab,kb->kia", self.Q, qm) + self.c
+        G = self.G(qm)
         dgp = self.prescribed(t1) - self.prescribed(t0) if self.driven else np.zeros(self.e.shape)
-        r_v = np.einsum("kia,ki->ka", G, lam)
-        r_lam = np.einsum("kia,ka->ki", G, vm) - dgp / h
-        GT = G.transpose(0, 2, 1)
-        blocks = [0.5 * np.einsum("ki,kiab->kab", lam, self.Q), GT, 0.5 * np.einsum("kiab,kb->kia", self.Q, vm),
-                  0.5 * G, np.zeros(lam.shape + (self.m,))]
+        r_v = np.matmul(lam[:, None, :], G)[:, 0, :]
+        r_lam = np.matmul(G, vm[:, :, None])[:, :, 0] - dgp / h
+        blocks = [self.QL @ lam.ravel(), G.transpose(0, 2, 1).ravel()[self.structure[1]],
+                  0.5 * (self.QG @ vm.ravel())[self.structure[2]], 0.5 * G.ravel()[self.structure[3]], self.zeros]
         work = -float(np.sum((lam * dgp)[self.counted])) if self.driven else 0.0
         return r_v, r_lam, blocks, work
 
     def position_residual(self, v, t):
-        """g(q) - g_p(t) of every joint [k, m]."""
+        """g(q) - g_p(t) = 1/2 (G(q) + c) q + e - g_p(t) of every joint [k, m]."""
         q = v[self.q_at]
-        return (0.5 * np.einsum("ka,kiab,kb->ki", q, self.Q, q) + np.einsum("kia,ka->ki", self.c, q) + self.e
-                - self.prescribed(t))
+        return 0.5 * np.matmul(self.G(q) + self.c, q[:, :, None])[:, :, 0] + self.e - self.prescribed(t)
 
 
 class JointBatch:
@@ -125,6 +157,7 @@ class JointBatch:
         self.rows, self.cols = rows, cols
         # the matrix entries sorted by row, once: one setValuesIJV per Jacobian
         self._order = np.lexsort((cols, rows))
+        self._gather = np.flatnonzero(np.concatenate(self._keep))[self._order] if self._keep else np.zeros(0, np.int64)
         r_sorted = rows[self._order]
         self._rowmap, starts = np.unique(r_sorted, return_index=True)
         self._indptr = np.append(starts, len(r_sorted)).astype(PETSc.IntType)
@@ -160,12 +193,7 @@ class JointBatch:
     def jacobian(self, A):
         if not self._terms or not len(self.rows):
             return
-        flat, k = [], 0
-        for r_v, r_lam, blocks, _ in self._terms:
-            for block in blocks:
-                flat.append(block.ravel()[self._keep[k]])
-                k += 1
-        values = np.concatenate(flat)[self._order]
+        values = np.concatenate([block.ravel() for terms in self._terms for block in terms[2]])[self._gather]
         A.setValuesIJV(self._indptr, self._cols, np.ascontiguousarray(values, dtype=PETSc.ScalarType),
                        addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rowmap)
 

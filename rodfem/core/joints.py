@@ -77,11 +77,15 @@ def ground(x: Sequence[float] = (), R=None) -> Point:
 GROUND = ground()   # the world frame at the origin
 
 
+ROUNDOFF = 1e-13   # coefficients below this, relative to g's scale, are the polarization's round-off
+
+
 def quadratic_form(g, n, scale=1.0):
     """(Q[m, n, n], c[m, n], e[m]) with g(q) = 1/2 q.Q_k q + c_k.q + e_k, by polarization.
 
     Exact for a quadratic g (each entry is a combination of values of g at
-    points 0, +-s e_i, s(e_i + e_j) with a step s = `scale`); raises
+    points 0, +-s e_i, s(e_i + e_j) with a step s = `scale`; coefficients at the
+    differences' round-off, below ROUNDOFF relative, are set to zero); raises
     ConstraintError if g is not quadratic (checked at random points).
     """
     s = float(scale)
@@ -97,6 +101,12 @@ def quadratic_form(g, n, scale=1.0):
         for j in range(i + 1, n):
             qij = (np.atleast_1d(g(I[i] + I[j])) - gp[i] - gp[j] + e) / s**2
             Q[:, i, j] = Q[:, j, i] = qij
+    # entries zero in exact arithmetic come out of the differences as round-off (~1e-16 of g's values):
+    # zero, so that the joints' matrix entries are only those that can be nonzero (rodfem/core/joint_batch.py)
+    noise = ROUNDOFF * (np.abs(Q).max(axis=(1, 2), initial=0.0) + np.abs(c).max(axis=1, initial=0.0) / s
+                        + np.abs(e) / s**2)
+    Q[np.abs(Q) <= noise[:, None, None]] = 0.0
+    c[np.abs(c) <= s * noise[:, None]] = 0.0
     rng = np.random.default_rng(0)
     for _ in range(3):
         q = rng.standard_normal(n) * s

@@ -35,7 +35,7 @@ class Orthonormality:
         self.names, self.worst = names, 0.0
 
     def record(self, row, system):
-        self.worst = max([self.worst] + [orthonormality(system.body(n), "x0") for n in self.names])
+        self.worst = max([self.worst] + [orthonormality(system.body(n), state="x0") for n in self.names])
 
 
 def test_scenes_are_registered():
