@@ -107,9 +107,27 @@ def child(case, batch, checkout, repeats=None):
     return json.loads(next(x for x in out.stdout.splitlines() if x.startswith("RESULT"))[6:])
 
 
-def focused(rows):
+def kept_sections(path):
+    """The sections of many_bodies.md that other runs wrote between markers (``<!-- name: ...`` to
+    ``<!-- /name -->``: --small, --rigid, bench_bodies_ranks.py), {name: lines}, to keep when the main
+    run writes the file again."""
+    text = open(path).read().split("\n") if os.path.exists(path) else []
+    found, name = {}, None
+    for line in text:
+        if name is None and line.startswith("<!-- ") and ":" in line and not line.startswith("<!-- /"):
+            name = line[5:].split(":", 1)[0]
+            found[name] = []
+        if name is not None:
+            found[name].append(line)
+            if line == f"<!-- /{name} -->":
+                name = None
+    return found
+
+
+def focused(rows, small_section=None):
     """The build-time table (chains: build s before / now, ms/step) and the small-step table (scenes:
-    ms/step before / now; the 16-element 3D rod's 10-step run against its 1000-step run)."""
+    ms/step before / now; the 16-element 3D rod's 10-step run against its 1000-step run), or the
+    small-step section of a --small run if there is one."""
     def f(r, key, fmt):
         v = r.get(key)
         return "" if v in (None, "") else fmt.format(float(v))
@@ -120,6 +138,8 @@ def focused(rows):
             lines.append(f"| {r['case'].split()[2]} | {f(r, 'before:build_s', '{:.2f}')} | "
                          f"{f(r, 'batch:build_s', '{:.2f}')} | {f(r, 'before:ms_per_step', '{:.3f}')} | "
                          f"{f(r, 'batch:ms_per_step', '{:.3f}')} |")
+    if small_section:
+        return lines + ["", "## Small steps", "", *small_section]
     lines += ["", "## Small steps", "", "| scene | steps | ms/step before | ms/step now |", "|---|---|---|---|"]
     for r in rows:
         if not r["case"].startswith("chain of "):
@@ -266,6 +286,8 @@ def report(rows, codes, write_report, load):
     for label in codes:
         columns += [(f"{label}:ms_per_step", cell(f"{label}:ms_per_step", "{:.3f}"), f"{label} ms/step"),
                     (f"{label}:build_s", cell(f"{label}:build_s", "{:.2f}"), f"{label} build s")]
+    path = os.path.join(HERE, "many_bodies.md")
+    sections = kept_sections(path)
     if load is None:   # (--tables: the note of the run that measured them)
         with open(os.path.join(HERE, "many_bodies.md")) as fh:
             kept = [x for x in fh.read().splitlines() if x.startswith("Load average")]
@@ -279,7 +301,10 @@ def report(rows, codes, write_report, load):
                         "of two runs; build: CPU seconds of a build after the first of a process (JIT cache warm). "
                         "Serial, one thread.  batch: this checkout; body by body: this checkout with System(batch=False); "
                         "before: the checkout given as --before (main before this work)."],
-                 notes=[load_note, "", *focused(rows)])
+                 notes=[load_note, "", *focused(rows, sections.pop("small", None))])
+    if sections:   # (the ranks and rigid-links sections, after the rest)
+        with open(path, "a") as fh:
+            fh.write("".join("\n" + "\n".join(lines) + "\n" for lines in sections.values()))
 
 
 if __name__ == "__main__":
