@@ -74,6 +74,7 @@ DAMPING = "tests/models/test_damping.py"
 CAPSTAN = "tests/models/test_capstan.py"
 GRASP = "tests/models/test_soft_arm_grasp.py"
 STABILITY = "tests/analysis/test_stability.py"
+RANK = "tests/la/test_rank.py"
 MUTATIONS = [
     # -- planar beam ---------------------------------------------------------------------------
     M("planar-S-sign", "forms/planar_beam.py",
@@ -1287,6 +1288,24 @@ MUTATIONS = [
       [("            lam[k] = self.X1.getArray(readonly=True)[at]", "            lam[:len(at)] = self.X1.getArray(readonly=True)[at]")],
       [PLACED + "::test_chain_on_ranks_equals_serial"],
       "the history's multipliers of a rank's joints written at the first joints' places"),
+    # -- building many joints: moved quadratic forms, the rank check, the sparse blocks (issue 26) -----
+    M("moved-form-unchecked", "rodfem/core/joints.py",
+      [("                if all(_agrees(g, moved, q, s) for q in", "                if True or all(_agrees(g, moved, q, s) for q in")],
+      [RANK + "::test_moved_forms_equal_the_polarized_ones"],
+      "a known joint's quadratic form moved to another joint without checking that it is that joint's"),
+    M("moved-form-linear-term", "rodfem/core/joints.py",
+      [("                moved = (Q, c - QT, e - c @ T + 0.5 * QT @ T)", "                moved = (Q, c, e - c @ T + 0.5 * QT @ T)")],
+      [RANK + "::test_moved_forms_equal_the_polarized_ones"],
+      "the moved form keeps c (forgets -Q T): every move is refused and each joint polarized again"),
+    M("rank-pivot-ignored", "rodfem/la/rank.py",
+      [("            if pivots.min() > PIVOT and", "            if pivots.min() > -1.0 and")],
+      [RANK + "::test_row_rank_against_the_singular_values",
+       "tests/app/test_driver.py::test_a_system_that_cannot_be_built_records_its_error"],
+      "the sparse rank check takes every elimination for full rank: redundant joints accepted"),
+    M("joint-block-structure-partial", "rodfem/core/joint_batch.py",
+      [("        structure_G = structure_q | (self.c != 0)", "        structure_G = structure_q")],
+      [JOINTS_3D, MANY],
+      "the joints' Jacobian leaves out the entries of G that only c makes nonzero"),
     # -- stability of an equilibrium (rodfem/analysis/stability.py, rodfem/la/pencil.py) ------------
     M("stability-sign", "rodfem/la/pencil.py",
       [("candidates = w[~zero & (w.real > GROWTH * np.abs(w)) & (w.imag >= 0)]",

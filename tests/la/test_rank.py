@@ -63,7 +63,8 @@ def hinge_between(qa0, qb0, constraint):
 def test_moved_forms_equal_the_polarized_ones():
     """Links along a line, each 0.3 further on and turned 0.1 rad more about z than the last: the
     hinges about z (translation and rotation invariant: the known form moved by T = q0' - q0 is
-    accepted only for the translated pairs) and a constraint that depends on where a is
+    accepted only for the translated pairs), a tether of each point to where it started (moved, with
+    Q T != 0: the linear term changes) and a constraint that depends on where a is
     (|x_a|^2 - |x_a(0)|^2: never moved).  Each found form equals the one polarized afresh to 1e-12,
     and the accepted moves cost 3 evaluations each (polarization: 325)."""
     from rodfem.forms import joints
@@ -74,7 +75,10 @@ def test_moved_forms_equal_the_polarized_ones():
 
     def distance_from_origin(a, b, a0, b0):
         return np.array([a.x @ a.x - a0.x @ a0.x])
-    for constraint, angles, moved in ((joints.revolute(axis=2), lambda k: 0.0, True),
+
+    def tethered(a, b, a0, b0):   # (each point near where it started: moved by T, Q T != 0)
+        return np.array([(a.x - a0.x) @ (a.x - a0.x) + (b.x - b0.x) @ (b.x - b0.x)])
+    for constraint, angles, moved in ((joints.revolute(axis=2), lambda k: 0.0, True), (tethered, lambda k: 0.0, True),
                                       (joints.revolute(axis=2), lambda k: 0.1 * k, False),
                                       (distance_from_origin, lambda k: 0.0, False)):
         forms = QuadraticForms()
