@@ -256,8 +256,7 @@ class Newton:
         reason = self.snes.getConvergedReason()
         lu = lu_name(self.settings)
         switched = lu != "petsc" and lu not in PIVOTING   # an unpivoted LU reached after a zero pivot
-        chord = int(self.settings.get("snes_lag_jacobian", 1)) > 1   # (its failure: full Newton first, below)
-        if (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE or (reason <= 0 and switched and not chord)) \
+        if (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE or (reason <= 0 and switched)) \
                 and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
             following = next_lu(self.A, lu)
             if following is not None:
@@ -273,7 +272,7 @@ class Newton:
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN:
             res = float("nan")  # PETSc leaves the last finite norm (0 at the first iteration)
         if reason <= 0 or res != res:
-            if chord:
+            if int(self.settings.get("snes_lag_jacobian", 1)) > 1:
                 return self._solve_full_newton(step, t)
             self.assembler.update(self._start)   # x back to the initial guess, not the last iterate
             raise NewtonFailure(step, t, res, its, _REASONS.get(reason, str(reason)))
