@@ -26,15 +26,16 @@ def rigid_frame(body, state="x1"):
     return x, R
 
 
-def orthonormality(*bodies, state="x1"):
-    """max |R^T R - I| over the nodes of director-based bodies (rigid or rods) of one communicator,
-    every rank (each rank its own nodes, then one reduction)."""
+def orthonormality(*bodies, state="x1", comm=None):
+    """max |R^T R - I| over the nodes of director-based bodies (rigid or rods), every rank of `comm`
+    (default: the first body's): each rank its own nodes, then one reduction.  A System's bodies
+    on this rank: ``orthonormality(*(b for _, b in system.body_items()), comm=system.comm)``."""
     worst = 0.0
     for body in bodies:
         R = np.stack([body.space.nodal(getattr(body, state), d)[1] for d in DIRECTORS], axis=2)
         if len(R):
             worst = max(worst, float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)))))
-    return bodies[0].comm.allreduce(worst, op=MPI.MAX)
+    return (comm or bodies[0].comm).allreduce(worst, op=MPI.MAX)
 
 
 def rod_inertia(m, l, r):

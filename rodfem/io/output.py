@@ -210,6 +210,10 @@ class RunWriter:
     summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
 
     def __init__(self, out, problem, n_steps, frames=100, section=0.0, times=None):
+        if getattr(problem, "distributed", False):   # (rank 0 would write its own bodies only)
+            raise InputError(f"the frames of a System(distribute=True) on {problem.comm.size} ranks cannot be "
+                             "written yet (each rank holds only its own bodies): run it serially, or from Python "
+                             "with rodfem.run (no files; the history in the Result)")
         plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
         # adaptive steps (n_steps None): the frames at the `times` the steps land on

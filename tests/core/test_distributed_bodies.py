@@ -155,3 +155,27 @@ row(res, s)
     for p in parallel:
         assert p.pop("placed")
         assert_same_rows({k: v for k, v in serial.items() if k != "placed"}, p)
+
+
+@pytest.mark.mpi
+def test_a_distributed_system_refuses_to_write_frames_in_one_line(tmp_path):
+    """`rodfem run` of a System(distribute=True) on 2 ranks: each rank holds only its own bodies, and rank 0
+    wrote the frames of its bodies only (and failed on the joints' glyphs of the others, a traceback).  Now:
+    exit 2, one line, on every rank."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from processes import REPO, environment, rodfem_lines
+    script = ("import sys\nfrom rodfem import System\nfrom rodfem.app.cli import main\nSystem.distribute = True\n"
+              f"sys.exit(main(['run', 'spring-damper-chain', '--set', 'n_bodies=4', '--set', 't_end=0.02', '--quiet', "
+              f"'--out', {str(tmp_path / 'out')!r}]))")
+    cmd = ["timeout", "120", shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n", "2",
+           sys.executable, "-c", script]
+    env = environment(PYTHONPATH=os.pathsep.join([REPO, os.environ.get("PYTHONPATH", "")]))
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=REPO, timeout=180)
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr[-3000:]
+    lines = [x for x in rodfem_lines(p.stderr) if x.startswith("rodfem")]
+    assert lines and all(x.startswith("rodfem: error: the frames of a System(distribute=True) on 2 ranks cannot "
+                                      "be written yet") for x in lines), p.stderr[-3000:]
