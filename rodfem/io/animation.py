@@ -11,7 +11,7 @@ The axes have equal scales and name their coordinate with its unit (m).  The ani
 has one size for all frames, the largest extent of the bodies in one frame (plus a margin): it is
 fixed when the whole motion fits in 2.5 times that size, and otherwise follows the bodies' centre
 frame by frame (the tick labels then move with it: the scale stays).  Every body has its colour
-(named in a legend when there are several), the time is written on every frame.  shapes.png
+(named in a legend when there are 2 to 12), the time is written on every frame.  shapes.png
 overlays up to 16 frames (8 for several bodies) in the window of the whole motion, their time as
 the shade of each body's colour, with a time colour bar.
 The GIF is drawn with matplotlib, one figure updated frame by frame, and saved with Pillow.
@@ -195,9 +195,12 @@ class Canvas:
         self.plt.close(self.fig)
 
 
+LEGEND = 12   # at most this many entries in a legend (a chain of 1000 links: none, it would hide the picture)
+
+
 def _names(sketches):
-    """The bodies' names for a legend (None for one body and no joints)."""
-    return [sk.name or f"body {b + 1}" for b, sk in enumerate(sketches)] if len(sketches) > 1 else None
+    """The bodies' names for a legend (None for one body and no joints, or more than LEGEND entries)."""
+    return [sk.name or f"body {b + 1}" for b, sk in enumerate(sketches)] if 1 < len(sketches) <= LEGEND else None
 
 
 def _bodies(sketches):
@@ -252,8 +255,9 @@ def write_animation(path, snapshots, dim, width, duration=6.0, dpi=80):
     drawn = len(snapshots[0][1])
     colours = [COLOURS[b % len(COLOURS)] for b in range(drawn)]
     canvas.limits(*layout.window(0))
-    artists = canvas.draw(snapshots[0][1], colours, labels=_names(snapshots[0][1]))
-    if drawn > 1:
+    names = _names(snapshots[0][1])
+    artists = canvas.draw(snapshots[0][1], colours, labels=names)
+    if names:
         ax.legend(loc="upper right", fontsize=7)
     moving = [a for body in artists for a in body]
     clock = fig.text(0.5, 0.97, "", ha="center", va="top")

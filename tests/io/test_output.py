@@ -340,3 +340,15 @@ def test_section_caps_face_outwards_and_carry_their_end_values(tmp_path):
         sides = values[1:-1:4]
         assert np.ptp(sides, axis=0).max() > 0.1                  # the element values differ along s
         assert np.array_equal(values[0], sides[0]) and np.array_equal(values[-1], sides[-1])
+
+
+def test_pictures_name_the_bodies_only_when_there_are_few():
+    """A legend for 2 to 12 bodies (and joints); none for one body, and none for a chain of 1000 links
+    (its 1000 entries covered shapes.png)."""
+    from types import SimpleNamespace
+
+    from rodfem.io.animation import LEGEND, _names
+    def bodies(n):
+        return [SimpleNamespace(name=f"link{k}", kind="box") for k in range(n)]
+    assert _names(bodies(1)) is None and _names(bodies(1000)) is None and _names(bodies(LEGEND + 1)) is None
+    assert _names(bodies(3)) == ["link0", "link1", "link2"] and len(_names(bodies(LEGEND))) == LEGEND
