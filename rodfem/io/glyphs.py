@@ -33,7 +33,8 @@ def marks_of(problem):
     for kind, items in (("joint", getattr(problem, "joints", [])), ("component", getattr(problem, "components", []))):
         for j in items:
             out.append(Mark(j.name, kind, (_point(j.a), _point(j.b))))
-    for name, body in problem.body_items():
+    placed = getattr(problem, "distributed", False)   # (each body on one rank: every rank knows them all)
+    for name, body in ([(n, ref.body) for n, ref in problem.bodies.items()] if placed else problem.body_items()):
         for sup in getattr(body, "supports", []):
             label = f"{name}.{sup.end}" if name else sup.end
             out.append(Mark(label, f"support {sup.kind}", ((name, sup.end, (), None),)))

@@ -52,7 +52,7 @@ from rodfem.fem import compat
 from rodfem.io.animation import box_size, marks_sketch, plot_shapes, sketch, write_animation
 from rodfem.io.frames import centreline, describe, drawn_section, surface
 from rodfem.io.glyphs import glyphs, marks_of
-from rodfem.io.snapshot import BodyView, blend
+from rodfem.io.snapshot import blend, body_views
 from rodfem.io.vtk import Array, write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
@@ -210,10 +210,6 @@ class RunWriter:
     summary and pictures.  `section`: the width of the drawn cross-section (0: automatic)."""
 
     def __init__(self, out, problem, n_steps, frames=100, section=0.0, times=None):
-        if getattr(problem, "distributed", False):   # (rank 0 would write its own bodies only)
-            raise InputError(f"the frames of a System(distribute=True) on {problem.comm.size} ranks cannot be "
-                             "written yet (each rank holds only its own bodies): run it serially, or from Python "
-                             "with rodfem.run (no files; the history in the Result)")
         plotting()   # before the run, not after its last step
         self.out, self.problem = out, problem
         # adaptive steps (n_steps None): the frames at the `times` the steps land on
@@ -222,7 +218,7 @@ class RunWriter:
         self.between = {n: theta for n, theta in plan if theta > 0}   # frames between level n and n + 1
         self._held = None                                               # (n, t_n, states at n)
         self.times = None if times is None else set(times)
-        self.views = [BodyView(name, body) for name, body in problem.body_items()]
+        self.views, self._gather = body_views(problem)   # (every body's, also those built on other ranks)
         self.marks = marks_of(problem)          # joints, components, supports (joints.pvd)
         self.mark_frames = []                   # [(t, file)]
         self.section, self.width = float(section), None
@@ -239,7 +235,7 @@ class RunWriter:
         if self._held is not None and self._held[0] == n - 1:     # a frame between level n - 1 and n
             _, t0, before = self._held
             theta, self._held = self.between[n - 1], None
-            after = [view.gather() for view in self.views]      # collective
+            after = self._gather()      # collective
             self.frame(t0 + theta * (row["t"] - t0), [blend(a, b, theta) for a, b in zip(before, after)])
         self.hold(n, row["t"])
         self.count += 1
@@ -247,7 +243,7 @@ class RunWriter:
     def hold(self, n, t):
         """Keep the state of level n if a frame lies between it and the next level (collective)."""
         if n in self.between:
-            self._held = (n, t, [view.gather() for view in self.views])
+            self._held = (n, t, self._gather())
 
     def _append(self, row):
         """One whole row of history.csv: a write that fails (a full disk) leaves the file at the end of
@@ -274,7 +270,7 @@ class RunWriter:
     def frame(self, t, states=None):
         """Write the frame of time t: the current state, or `states` (BodyStates on rank 0).  Collective."""
         if states is None:
-            states = [view.gather() for view in self.views]
+            states = self._gather()
         self.out.do("write a frame", self._write_frame, clean_time(t), states)
 
     def file_name(self, kind, k, view):

@@ -134,6 +134,55 @@ class BodyView:
         return state
 
 
+    def facts(self):
+        """What the writer needs to know of this body besides its model (plain values, to send to
+        rank 0 when the body is built on another rank)."""
+        return {"dim": self.dim, "degree": self.degree, "omitted": self.omitted, "nodal": self.nodal,
+                "rates": self.rates, "velocity": self.velocity, "has_frame": self.has_frame, "kind": self.kind,
+                "outputs": self.output_names()}
+
+
+class PlacedView(BodyView):
+    """The view of a body of a System(distribute=True) built whole on another rank: its model (every
+    rank has it) and the facts its rank sent; its states come through `body_views`' gather."""
+
+    def __init__(self, name, model, facts):   # (no Body here: nothing of BodyView.__init__)
+        self.name, self.body, self.model = name, None, model
+        self._outputs = None
+        for key, value in facts.items():
+            setattr(self, key, value)
+
+    def output_names(self):
+        return self.outputs
+
+    def gather(self):
+        raise RuntimeError(f"body {self.name} is built on another rank: its state comes through body_views")
+
+
+def body_views(problem):
+    """(views of the bodies, gather): the output's views of every body in the order of
+    problem.body_items(), on every rank, and a function returning their BodyStates on rank 0 (None
+    elsewhere).  Collective.  For a System(distribute=True) each body is built whole on one rank: the
+    views of the others' bodies are PlacedViews (their facts exchanged once), and every frame's states
+    are sent to rank 0 by the ranks that own them."""
+    local = [BodyView(name, body) for name, body in problem.body_items()]
+    if not getattr(problem, "distributed", False):
+        return local, lambda: [view.gather() for view in local]
+    comm = problem.comm
+    facts = {}
+    for part in comm.allgather({view.name: view.facts() for view in local}):
+        facts.update(part)
+    own = {view.name: view for view in local}
+    views = [own.get(name) or PlacedView(name, ref.body.model, facts[name]) for name, ref in problem.bodies.items()]
+
+    def gather():
+        states = {}
+        for part in comm.gather({view.name: view.gather() for view in local}, root=0) or ():
+            states.update(part)
+        return [states[view.name] for view in views] if comm.rank == 0 else [None] * len(views)
+    return views, gather
+
+
 def blend(a, b, theta):
     """The BodyState (1 - theta) a + theta b of one body at two time levels (None on ranks other than 0):
     the state at t_n + theta h.  The midpoint rule (and the discrete gradient) move the configuration
