@@ -75,7 +75,8 @@ def on_edge(n, ij):
 
 def build(p, comm):
     n = p["n"]
-    net = System(integrator=p["integrator"], comm=comm)
+    # (under mpirun each string is built whole on one rank: many small bodies, distribute=True)
+    net = System(integrator=p["integrator"], comm=comm, distribute=True)
     model = String(MATERIALS[p["material"]](EA=p["EA"]), p["rhoA"])
     a = p["L"] / (n + 1)
     ends = {}   # crossing -> the string ends that meet there

@@ -53,8 +53,9 @@ def build(p, comm):
     l, m = L / N, p["mass"] / N
     # (full Newton at every size: at 1000 links, 35,000 unknowns, rodfem would reuse the Jacobian over
     # iterations; that chord Newton fails here now and then, and the solver then falls back to a
-    # pivoting LU for the rest of the run: 123 ms per step against 93 with full Newton)
-    chain = System(integrator=p["integrator"], comm=comm, newton_options={"snes_lag_jacobian": 1})
+    # pivoting LU for the rest of the run: 123 ms per step against 93 with full Newton; under mpirun each
+    # link is built whole on one rank: many small bodies, distribute=True)
+    chain = System(integrator=p["integrator"], comm=comm, newton_options={"snes_lag_jacobian": 1}, distribute=True)
     model = RigidBody(m, rod_inertia(m, l, p["slenderness"] * l))
 
     # ## The links, straight along x, at rest, each with its weight as an input

@@ -131,7 +131,8 @@ def frame_along(e):
 def build(p, comm):
     X = nodes(p)
     struts, cables = members(p)
-    prism = System(integrator=p["integrator"], comm=comm)
+    # (under mpirun each strut and cable is built whole on one rank: many small bodies, distribute=True)
+    prism = System(integrator=p["integrator"], comm=comm, distribute=True)
     material = MATERIALS[p["material"]](EA=p["EA"])
     side = np.linalg.norm(X[0, 1] - X[0, 0])
     q_h = p["tension"] / side   # the outer triangles' force density
