@@ -71,8 +71,8 @@ def run_scene(scene, overrides=None, out=None, progress=False, comm=MPI.COMM_WOR
             result = Result(steps=start.step if start else 0)
             writer = (RunWriter(outdir, problem, n_steps, p.get("frames", 101), p.get("section", 0.0),
                                 control.output_times or None) if outdir else None)
-        saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
         try:
+            saver = checkpoint.Saver(outdir, scene.name, p, problem, every, n_steps) if every and outdir else None
             if not (start and (start.t >= p["t_end"] if control.adaptive else start.step == n_steps)):
                 # (a checkpoint at t_end: nothing left to run)
                 run(problem, p["dt"], p["t_end"], writer=writer, progress=progress, result=result, start=start,

@@ -54,7 +54,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rodfem.errors import ParameterError, agreed
+from rodfem.errors import InputError, ParameterError, agreed
 from rodfem.fem import compat
 from rodfem.la.lu_chain import LU_CHAIN, lu_name
 
@@ -156,6 +156,10 @@ class Layout:
 
     def __init__(self, problem):
         self.problem = problem.build()
+        if getattr(problem, "distributed", False):   # (each rank would save or restore its own bodies only)
+            raise InputError(f"checkpoints of a system whose bodies are placed whole on ranks (distribute=True, "
+                             f"{problem.comm.size} ranks) are not written or read yet: run it without "
+                             "checkpoint_every and --resume, or serially")
         self.layout = problem.layout
 
     def current(self):

@@ -196,3 +196,18 @@ def test_a_distributed_system_writes_every_bodys_frames(tmp_path):
             assert np.allclose(a.point_data[k].values, b.point_data[k].values, rtol=0, atol=1e-10), (f, k)
     assert (serial / "fields.json").read_text() == (placed / "fields.json").read_text()
     assert_same_history(history(serial), history(placed), 1e-10, skip=("wall_time", "newton_its"))
+
+
+@pytest.mark.mpi
+def test_checkpoints_of_placed_bodies_are_refused_in_one_line(tmp_path):
+    """A checkpoint of bodies placed whole on ranks would hold rank 0's bodies only (and the ranks' gathers
+    would not match): refused before the first step, one line, summary.json 'error'."""
+    from processes import rodfem, rodfem_lines, summary
+    out = tmp_path / "out"
+    p = rodfem("run", "chain-1000", "--set", "n_links=6", "--set", "t_end=0.02", "--set", "checkpoint_every=2",
+               "--quiet", "--out", out, np=2, timeout=300)
+    lines = [x for x in rodfem_lines(p.stderr) if x.startswith("rodfem")]
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr[-3000:]
+    assert lines == ["rodfem: error: checkpoints of a system whose bodies are placed whole on ranks (distribute=True, "
+                     "2 ranks) are not written or read yet: run it without checkpoint_every and --resume, or serially"]
+    assert summary(out)["status"] == "error" and not (out / "checkpoint.npz").exists()
