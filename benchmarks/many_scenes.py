@@ -4,7 +4,7 @@
                                                # -> benchmarks/many_scenes.{csv,md}
 
 --only runs the cases whose size label contains one of the words (e.g. --only "1000 links" tower);
---append keeps the rows of an earlier run (benchmarks/many_scenes.csv) of the cases not run now.
+--append keeps the rows of an earlier run (benchmarks/many_scenes.csv) of the cases and rank counts not run now.
 The table is rewritten after every case.
 
 Each case runs in a process of its own (under `mpirun -n 2` for 2 ranks, inside `timeout`): the
@@ -85,7 +85,7 @@ def main():
     args = ap.parse_args()
     sys.path.insert(0, HERE)
     cases = [c for c in (QUICK if args.quick else CASES) if not args.only or any(w in c[3] for w in args.only)]
-    rows = earlier([(c[0], c[3]) for c in cases]) if args.append else []
+    rows = earlier([(c[0], c[3], r) for c in cases for r in args.ranks if r in c[4]]) if args.append else []
     for case in cases:
         for ranks in [r for r in args.ranks if r in case[4]]:
             r = child(case, ranks, args.timeout)
@@ -102,14 +102,14 @@ def order(row):
 
 
 def earlier(replaced):
-    """The rows of benchmarks/many_scenes.csv but those of the cases `replaced` ((scene, size) pairs), numbers as
+    """The rows of benchmarks/many_scenes.csv but those of the runs `replaced` ((scene, size, ranks)), numbers as
     numbers."""
     import csv
     path = os.path.join(HERE, "many_scenes.csv")
     if not os.path.exists(path):
         return []
     with open(path) as f:
-        rows = [r for r in csv.DictReader(f) if (r["scene"], r["size"]) not in replaced]
+        rows = [r for r in csv.DictReader(f) if (r["scene"], r["size"], int(r["ranks"])) not in replaced]
     for r in rows:
         for k, v in list(r.items()):
             if v == "":
