@@ -8,13 +8,14 @@ assembled together (rodfem/fem/batch.py), and the global block system couples th
 through the joints between bodies of different ranks (rodfem/fem/assembly.py's RankLayout:
 each rank holds its bodies' dofs, then the multipliers of its joints).
 
-The bodies are placed when the system is built, when their number is known: body k of N, of
-weight w_k (its number of elements, one for a rigid body), goes to the rank
+The bodies are placed when the system is built, when their number is known: numbered k = 1..N
+in the reverse Cuthill-McKee order of the graph of bodies and joints (joined bodies close), body k
+of weight w_k (its number of elements, one for a rigid body) goes to the rank
 
     r_k = floor(R (w_1 + ... + w_{k-1} + w_k / 2) / (w_1 + ... + w_N))
 
 (consecutive bodies on one rank, equal total weights; a joined chain crosses ranks R - 1
-times).  Until then a body is a `Placement` (its model and arguments); on the other ranks it
+times, a net of n x n strings ~n times).  Until then a body is a `Placement` (its model and arguments); on the other ranks it
 stays one.  The joints' points are computed on the rank of their body and shared
 (`share_points`): every rank then knows their dofs and initial coordinates.
 """
@@ -24,16 +25,31 @@ from mpi4py import MPI
 from rodfem.errors import ConstraintError
 
 
-def owners(weights, size):
-    """The rank of each body: consecutive bodies, balanced by weight, every rank at least one body
-    (len(weights) >= size)."""
+def owners(weights, size, links=()):
+    """The rank of each body: bodies consecutive in an order that keeps joined bodies together,
+    balanced by weight, every rank at least one body (len(weights) >= size).
+
+    The order: reverse Cuthill-McKee of the graph of the bodies and `links` (pairs of body indices:
+    joints, springs, dampers), which numbers the bodies by levels of distance; cut into R parts, a
+    chain is cut R - 1 times and a net of n x n strings along ~n of its crossings (in the order the
+    strings were added, rows then columns, every crossing joined two ranks)."""
     w = np.asarray(weights, dtype=float)
     if len(w) < size:
         raise ValueError(f"{len(w)} bodies cannot be placed on {size} ranks")
-    mid = np.cumsum(w) - 0.5 * w
-    rank = np.minimum((size * mid / w.sum()).astype(np.int64), size - 1)
-    if len(np.unique(rank)) < size:   # (very unequal weights left a rank empty: by count)
-        rank = (size * (np.arange(len(w)) + 0.5) / len(w)).astype(np.int64)
+    order = np.arange(len(w))
+    links = np.asarray([(a, b) for a, b in links if a != b], dtype=np.int64).reshape(-1, 2)
+    if len(links):
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+        graph = coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])), shape=(len(w), len(w))).tocsr()
+        order = np.asarray(reverse_cuthill_mckee(graph + graph.T, symmetric_mode=True), dtype=np.int64)
+    ws = w[order]
+    mid = np.cumsum(ws) - 0.5 * ws
+    ranked = np.minimum((size * mid / ws.sum()).astype(np.int64), size - 1)
+    if len(np.unique(ranked)) < size:   # (very unequal weights left a rank empty: by count)
+        ranked = (size * (np.arange(len(w)) + 0.5) / len(w)).astype(np.int64)
+    rank = np.empty(len(w), dtype=np.int64)
+    rank[order] = ranked
     return rank
 
 

@@ -394,7 +394,11 @@ class System:
         if not all(isinstance(r.body, Placement) for r in refs):
             return
         spread = len(refs) < self.comm.size or bool(self.contacts)
-        rank = owners([r.body.weight for r in refs], self.comm.size) if not spread else None
+        index = {id(r): k for k, r in enumerate(refs)}
+        links = [(index[id(item.a.body)], index[id(item.b.body)]) for item in self.joints + self.components
+                 if getattr(item, "a", None) is not None and getattr(item, "b", None) is not None
+                 and id(item.a.body) in index and id(item.b.body) in index]
+        rank = owners([r.body.weight for r in refs], self.comm.size, links) if not spread else None
         error = None
         if not hasattr(self, "_meshes"):
             self._meshes = Meshes() if self.share else None
