@@ -211,3 +211,34 @@ def test_checkpoints_of_placed_bodies_are_refused_in_one_line(tmp_path):
     assert lines == ["rodfem: error: checkpoints of a system whose bodies are placed whole on ranks (distribute=True, "
                      "2 ranks) are not written or read yet: run it without checkpoint_every and --resume, or serially"]
     assert summary(out)["status"] == "error" and not (out / "checkpoint.npz").exists()
+
+
+def test_placement_keeps_joined_bodies_together():
+    """owners(): a chain of 12 bodies on 3 ranks is cut twice and balanced; a net of strings between the
+    crossings of a 20 x 20 grid (760 strings, added horizontal ones first, then vertical ones: every
+    crossing joins the strings that meet there) is cut along ~20 crossings on 2 ranks (in the order
+    added: nearly all of them joined the two ranks)."""
+    import numpy as np
+
+    from rodfem.core.placement import owners
+    chain = owners([1] * 12, 3, [(k, k + 1) for k in range(11)])
+    assert sorted(np.bincount(chain).tolist()) == [4, 4, 4]
+    assert sum(chain[k] != chain[k + 1] for k in range(11)) == 2
+    n = 20
+    strings, meeting = [], {}
+    for i in range(n):
+        for j in range(n - 1):
+            strings.append(((i, j), (i, j + 1)))     # horizontal
+    for i in range(n - 1):
+        for j in range(n):
+            strings.append(((i, j), (i + 1, j)))     # vertical
+    for k, ends in enumerate(strings):
+        for c in ends:
+            meeting.setdefault(c, []).append(k)
+    links = [(ks[0], k) for ks in meeting.values() for k in ks[1:]]
+
+    def cut(rank):
+        return sum(rank[a] != rank[b] for a, b in links)
+    assert cut(owners([1] * len(strings), 2)) >= (n - 2) ** 2          # (no links: the order added)
+    placed = owners([1] * len(strings), 2, links)
+    assert np.bincount(placed).tolist() == [len(strings) // 2] * 2 and cut(placed) <= 3 * n
