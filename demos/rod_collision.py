@@ -121,18 +121,23 @@ def straight(centre, axis, normal, velocity, L):
     return initial
 
 
+def solid_rod(E, r=0.01, rho=1750.0, poisson=0.5):
+    """The Cosserat rod of a solid circular section of radius r, density rho, Young's modulus E and
+    G = E / (2 (1 + poisson)): line density rho A, rotary inertia rho (2I, I, I), compliances
+    1/(EA), 1/(GA), 1/(GA) and 1/(2GI), 1/(EI), 1/(EI) (A = pi r^2, I = pi r^4 / 4)."""
+    A, Isec = np.pi * r**2, np.pi * r**4 / 4
+    G = E / (2 * (1 + poisson))
+    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec),
+                                    [1 / (E * A), 1 / (G * A), 1 / (G * A)], [1 / (G * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
+
+
 def build(p, comm):
     from rodfem.errors import ParameterError
     L, r, V = p["L"], p["r"], p["V"]
     for name in ("offset_a", "offset_b"):
         if not abs(p[name]) < 0.5 * L:
             raise ParameterError(f"parameter '{name}' must be in (-L/2, L/2) = ({-0.5 * L:g}, {0.5 * L:g}) (got {p[name]:g})")
-    m, rhoA, rhoJ, _ = section(p)
-    E = p["E"]
-    G = E / (2 * (1 + p["poisson"]))
-    A, Isec = np.pi * r**2, np.pi * r**4 / 4
-    rod = cosserat_rod.CosseratRod(rhoA, rhoJ, [1 / (E * A), 1 / (G * A), 1 / (G * A)],
-                                   [1 / (G * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
+    rod = solid_rod(p["E"], r, p["rho"], p["poisson"])
     # ## The two rods: a along x (centre at y = offset_b), b along y (centre at x = offset_a)
     z = r + 0.5 * p["gap"]
     system = System(integrator=p["integrator"], comm=comm, newton_options={"snes_atol": 1e-12, "snes_max_it": 40})

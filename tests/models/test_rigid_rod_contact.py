@@ -19,25 +19,14 @@ from rodfem import Load, Support, System, ground, run
 from rodfem.analysis.statics import solve
 from rodfem.core.bodycontact import Pairing
 from rodfem.core.components import potential
+from rodfem.demos.rod_collision import solid_rod
 from rodfem.errors import ConstraintError, ParameterError
 from rodfem.fem.jit import compile_forms
-from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import Coulomb, stiffness_for
 from rodfem.forms.rigid_body import PlanarRigidBody, PointMass, RigidBody
 from rodfem.forms.rod_contact import RodContact, closest_points
 from rodfem.forms.string import String
 from rodfem.forms.string_materials import biot
-
-
-def column(result, name):
-    return np.array([row[name] for row in result.rows])
-
-
-def rod_model(E, r=0.01, rho=1750.0):
-    A, Isec = np.pi * r**2, np.pi * r**4 / 4
-    G = E / 3
-    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec),
-                                    [1 / (E * A), 1 / (G * A), 1 / (G * A)], [1 / (G * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
 
 
 def straight(L, z=0.0, velocity=(0.0, 0.0, 0.0)):
@@ -141,7 +130,7 @@ def ball_on_beam(x_ball, n, M=0.02, L=1.0, r=0.01, E=1e9, R_s=0.03, g=9.81):
     k = stiffness_for(P, 1e-4)
     z = r + R_s - 1e-5
     s = System(integrator="discrete-gradient")
-    beam = s.add("beam", rod_model(E, r), L, n, initial=straight(L), supports=[Support("left"), Support("right")])
+    beam = s.add("beam", solid_rod(E, r), L, n, initial=straight(L), supports=[Support("left"), Support("right")])
     ball = s.add("ball", PointMass(M), initial=PointMass.initial((x_ball, 0.0, z)),
                  loads=[Load("v", [0.0, 0.0, -P], "domain", "weight")])
     s.contact(RodContact(k, r, radius_b=R_s), beam, ball, name="rest")
@@ -227,7 +216,7 @@ def impact(mass_ratio, offset, E, n=6, V=0.1, dt=1e-3, t_end=0.05, rule="discret
     1/m_eff = 1/M + 1/m + offset^2 / I (I = m L^2/12 + the sections' rotary inertia), after which
     pz_ball = -M V + J, pz_rod = -J, Ly_rod = offset J (about the origin: the rod's centre moves along z)."""
     L, r, rho, R_s, gap, pen = 0.5, 0.01, 1750.0, 0.02, 1e-3, 1e-3
-    model = rod_model(E, r, rho)
+    model = solid_rod(E, r, rho)
     m = rho * np.pi * r**2 * L
     inertia = m * L**2 / 12 + rho * np.pi * r**4 / 4 * L
     M = mass_ratio * m
@@ -278,10 +267,10 @@ def test_ball_hitting_a_stiff_rod_at_its_centre(mass_ratio):
     within 1e-4 of J for a stiff rod (E = 1e10; measured 2.1e-5 and 1.4e-5: the rod's vibration)."""
     result, answer = impact(mass_ratio, 0.0, 1e10)
     last = result.rows[-1]
-    assert column(result, "hit.N").max() > 0 and last["hit.N"] == 0.0
+    assert result.column("hit.N").max() > 0 and last["hit.N"] == 0.0
     for k in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, k) - result.rows[0][k]).max() <= 1e-14 * answer["scale"], k
-    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+        assert np.abs(result.column(k) - result.rows[0][k]).max() <= 1e-14 * answer["scale"], k
+    assert result.max_balance_error <= 1e-12 * result.column("H").max()
     error = max(abs(last[k] - answer[k]) / answer["J"] for k in ("pz_ball", "pz_rod"))
     assert error <= 1e-4
 
@@ -297,10 +286,10 @@ def test_ball_hitting_a_rod_off_centre_spins_it():
     for E in (1e9, 1e10):
         result, answer = impact(0.7, 0.1, E, spin=(3.0, -2.0, 5.0))
         first, last = result.rows[0], result.rows[-1]
-        assert column(result, "hit.N").max() > 0 and last["hit.N"] == 0.0
+        assert result.column("hit.N").max() > 0 and last["hit.N"] == 0.0
         for k in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-            assert np.abs(column(result, k) - first[k]).max() <= 1e-14 * answer["scale"], k
-        assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+            assert np.abs(result.column(k) - first[k]).max() <= 1e-14 * answer["scale"], k
+        assert result.max_balance_error <= 1e-12 * result.column("H").max()
         assert np.abs(spin_of(last) - spin_of(first)).max() <= 1e-14 * answer["scale"]
         assert abs(last["Ly_rod"]) > 0.05 * answer["J"]
         errors.append(max(abs(last[k] - answer[k]) / answer["J"] for k in ("pz_ball", "pz_rod", "Ly_rod")))
@@ -320,10 +309,10 @@ def test_ball_hitting_a_free_string_keeps_momentum_and_energy():
     m_eff = 1 / (1 / M + 1 / (rhoA * 0.05))
     s.contact(RodContact(1.5 * m_eff * V**2 / 1e-3**3, r, radius_b=R_s), ball, string, name="hit")
     result = run(s, 2e-4, 0.03)
-    assert column(result, "hit.N").max() > 0 and result.rows[-1]["hit.N"] == 0.0
-    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+    assert result.column("hit.N").max() > 0 and result.rows[-1]["hit.N"] == 0.0
+    assert result.max_balance_error <= 1e-12 * result.column("H").max()
     for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * M * V * L, key
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14 * M * V * L, key
 
 
 def test_a_spinning_ball_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_the_ball_arm():
@@ -334,7 +323,7 @@ def test_a_spinning_ball_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_
     to its rotation)."""
     M, V, R_s, L, r = 0.02, 0.5, 0.02, 0.5, 0.01
     s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
-    rod = s.add("rod", rod_model(1e7), L, 6, initial=straight(L))
+    rod = s.add("rod", solid_rod(1e7), L, 6, initial=straight(L))
     Jb = 0.4 * M * R_s**2
     ball = s.add("ball", RigidBody(M, (Jb, Jb, Jb)),
                  initial=RigidBody.initial((0.07, 0.0, r + R_s + 1e-3), v=(0.2, 0.0, -V), omega=(1.0, 2.0, 0.5)))
@@ -343,17 +332,17 @@ def test_a_spinning_ball_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_
     s.marker("ball", ball.point())
     h = 2e-4
     result = run(s, h, 0.01)
-    assert column(result, "rub.N").max() > 0
+    assert result.column("rub.N").max() > 0
     scale = M * V
     for key in ("p_x", "p_y", "p_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * scale, key
-    Mf = np.column_stack([column(result, f"rub.Mf_{c}") for c in "xyz"])
-    Lt = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
-    assert np.abs(Mf).max() > 1e-3 * R_s * 0.3 * column(result, "rub.N").max()
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14 * scale, key
+    Mf = np.column_stack([result.column(f"rub.Mf_{c}") for c in "xyz"])
+    Lt = np.column_stack([result.column(f"L_{c}") for c in "xyz"])
+    assert np.abs(Mf).max() > 1e-3 * R_s * 0.3 * result.column("rub.N").max()
     assert np.abs(np.diff(Lt, axis=0) - h * Mf[1:]).max() <= 1e-13 * scale * L
-    lost = np.diff(column(result, "dissipated"))
+    lost = np.diff(result.column("dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
-    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+    assert result.max_balance_error <= 1e-12 * result.column("H").max()
 
 
 # -- bad input -----------------------------------------------------------------------------------
@@ -362,7 +351,7 @@ def test_bad_input_is_refused_in_one_line():
     """A sphere's radius <= 0, a rigid body without a 3D position, two rigid bodies, a rigid body with itself,
     a planar rigid body: one line each (ConstraintError, exit code 2)."""
     s = System()
-    rod = s.add("rod", rod_model(1e6), 0.5, 2)
+    rod = s.add("rod", solid_rod(1e6), 0.5, 2)
     ball = s.add("ball", PointMass(1.0, 3), initial=PointMass.initial((0, 0, 1.0), (0, 0, 0)))
     other = s.add("other", PointMass(1.0, 3), initial=PointMass.initial((0, 0, 2.0), (0, 0, 0)))
     flat = s.add("flat", PlanarRigidBody(1.0, 1.0), initial=PlanarRigidBody.initial((0.0, 0.0)))
@@ -433,10 +422,10 @@ def test_ball_dropped_on_a_string_keeps_the_balance():
         scene.values({"stretch": 0.99})
     p = scene.values({"t_end": 0.12, "n_elements": 8})
     result = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
-    N = column(result, "hit.N")
+    N = result.column("hit.N")
     assert N.max() > p["M"] * p["g"]
-    assert result.max_balance_error <= 1e-12 * np.abs(column(result, "H")).max()
-    assert np.abs(column(result, "hit.Fn_x")).max() <= 1e-12 * N.max()
+    assert result.max_balance_error <= 1e-12 * np.abs(result.column("H")).max()
+    assert np.abs(result.column("hit.Fn_x")).max() <= 1e-12 * N.max()
     theta, sag, z_rest = rest(p)
     assert result.rows[-1]["z_rest"] == z_rest and 0 < z_rest < p["R_s"] + p["r"]
-    assert column(result, "ball_z").min() > -3 * sag
+    assert result.column("ball_z").min() > -3 * sag

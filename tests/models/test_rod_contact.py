@@ -17,26 +17,13 @@ from rodfem.analysis.statics import solve
 from rodfem.analysis.stepping import StepControl
 from rodfem.core.bodycontact import Pairing, close_pairs, segment_spheres
 from rodfem.core.components import potential
-from rodfem.demos.rod_collision import rigid, scene, section, straight
+from rodfem.demos.rod_collision import rigid, scene, section, solid_rod, straight
 from rodfem.errors import ConstraintError, InputError, NewtonFailure, ParameterError
-from rodfem.forms import cosserat_rod
 from rodfem.forms.contact import stiffness_for
 from rodfem.forms.rigid_body import PointMass
 from rodfem.forms.rod_contact import RodContact, closest_points
 from rodfem.forms.string import String
 from rodfem.forms.string_materials import logarithmic
-
-
-def column(result, name):
-    return np.array([row[name] for row in result.rows])
-
-
-def rod_model(E, r=0.01, rho=1750.0):
-    A, Isec = np.pi * r**2, np.pi * r**4 / 4
-    G = E / 3
-    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec),
-                                    [1 / (E * A), 1 / (G * A), 1 / (G * A)], [1 / (G * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
-
 
 # -- geometry and the step's force, without a mesh ---------------------------------------------------
 
@@ -170,13 +157,13 @@ def test_collision_keeps_momentum_and_energy(rule):
     p, result = collide(integrator=rule, offset_a=0.1, offset_b=0.05, t_end=0.05, dt=1e-3)
     scale = rigid(p)["m_eff"] * p["V"] * p["L"]
     for k in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, k) - result.rows[0][k]).max() <= 1e-14 * scale, k
-    N = column(result, "touch.N")
-    assert N.max() > 0 and column(result, "touch.penetration").max() > 0
-    Fz = column(result, "touch.Fn_z")[np.argmax(N)]   # on rod a, along z up to the lean of the bent rods
+        assert np.abs(result.column(k) - result.rows[0][k]).max() <= 1e-14 * scale, k
+    N = result.column("touch.N")
+    assert N.max() > 0 and result.column("touch.penetration").max() > 0
+    Fz = result.column("touch.Fn_z")[np.argmax(N)]   # on rod a, along z up to the lean of the bent rods
     assert 0.999 * N.max() <= Fz <= N.max() * (1 + 1e-12)
     if rule == "discrete-gradient":
-        assert result.max_balance_error <= 1e-12 * max(column(result, "touch.energy").max(), 1e-30) + 1e-15
+        assert result.max_balance_error <= 1e-12 * max(result.column("touch.energy").max(), 1e-30) + 1e-15
     else:
         assert result.max_balance_error >= 1e-8
 
@@ -212,11 +199,11 @@ def test_strings_collide_with_the_same_contact():
     k = 1.5 * (0.25 * rhoA * 0.5) * V**2 / 1e-3**3
     s.contact(RodContact(k, r), a, b, name="strings")
     result = run(s, 2e-4, 0.02)
-    assert column(result, "strings.N").max() > 0 and result.rows[-1]["strings.N"] == 0.0
-    H = column(result, "H")
+    assert result.column("strings.N").max() > 0 and result.rows[-1]["strings.N"] == 0.0
+    H = result.column("H")
     assert result.max_balance_error <= 1e-12 * H.max()
     for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * rhoA * V, key
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14 * rhoA * V, key
     assert result.rows[-1]["p_z"] == pytest.approx(0.0, abs=1e-15)
 
 
@@ -230,7 +217,7 @@ def test_rod_resting_across_clamped_rods_carries_its_weight(xb, xc):
     F_b = W (x_c - x_cm) / (x_c - x_b), up to the cylinders' lean: O(R theta / lever) ~ 5e-4 (the symmetric
     case: W/2 each to 1e-7)."""
     L, r, g = 0.5, 0.01, 9.81
-    model = rod_model(1e9)
+    model = solid_rod(1e9)
     W = model.rhoA * L * g
     k, d0 = stiffness_for(W / 2, 1e-4), 5e-5
     s = System(integrator="discrete-gradient")
@@ -293,7 +280,7 @@ def hairpin(E=1e6, V=0.5, contact=True, L=0.5, r=0.01, bend=0.03, n=12):
                **{f"d{i + 1}": directors(i) for i in range(3)},
                **{f"w{i}": lambda x: np.zeros((3, x.shape[1])) for i in (1, 2, 3)}}
     s = System(integrator="discrete-gradient", newton_options={"snes_atol": 1e-12, "snes_max_it": 40})
-    model = rod_model(E)
+    model = solid_rod(E)
     rod = s.add("hairpin", model, L, n, initial=initial)
     KE = 0.5 * model.rhoA * 2 * V**2 * l / 3
     k = 1.5 * KE / 1e-3**3
@@ -311,16 +298,16 @@ def test_self_contact_stops_a_hairpin_from_passing_through_itself():
     same legs pass through each other."""
     s, KE, k = hairpin()
     result = run(s, 4e-4, 0.08)
-    pen = column(result, "self.penetration")
+    pen = result.column("self.penetration")
     assert pen.max() > 1e-5
     assert pen.max() <= (3 * KE / k) ** (1 / 3)
-    assert column(result, "self.energy").max() <= KE * (1 + 1e-9)     # H_0 = KE: the U is stress-free
-    assert column(result, "tip0_y").min() > 0 and column(result, "tip1_y").max() < 0
+    assert result.column("self.energy").max() <= KE * (1 + 1e-9)     # H_0 = KE: the U is stress-free
+    assert result.column("tip0_y").min() > 0 and result.column("tip1_y").max() < 0
     assert result.max_balance_error <= 1e-12
     for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14
     free, _, _ = hairpin(contact=False)
-    assert column(run(free, 4e-4, 0.08), "tip0_y").min() < 0
+    assert run(free, 4e-4, 0.08).column("tip0_y").min() < 0
 
 
 # -- a step that would carry the rods through each other -------------------------------------------
@@ -340,12 +327,12 @@ def test_a_step_that_would_pass_the_rods_through_each_other_is_split():
     free = scene.build(p, MPI.COMM_WORLD)
     free.guard_crossing = False
     tunnel = run(free, p["dt"], p["t_end"])
-    assert column(tunnel, "touch.N").max() == 0.0 and tunnel.stepping["rejected"] == 0
+    assert tunnel.column("touch.N").max() == 0.0 and tunnel.stepping["rejected"] == 0
     assert tunnel.rows[-1]["pz_a"] == pytest.approx(before, rel=1e-12)
     guarded = run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"])
     assert guarded.stepping["rejected"] > 0 and guarded.stepping["substeps"] > 5
     assert guarded.rows[-1]["pz_a"] > 0 and abs(guarded.rows[-1]["pz_a"] - answer["pz_a"]) <= 0.25 * answer["J"]
-    assert guarded.max_balance_error <= 1e-11 * column(guarded, "H").max()
+    assert guarded.max_balance_error <= 1e-11 * guarded.column("H").max()
     with pytest.raises(NewtonFailure, match="may pass through each other"):
         run(scene.build(p, MPI.COMM_WORLD), p["dt"], p["t_end"], control=StepControl(dt_min=p["dt"]))
 
@@ -360,7 +347,7 @@ def test_bad_input_is_refused_in_one_line():
     with pytest.raises(InputError, match="exclude must be an arc length"):
         RodContact(1.0, 0.01, exclude=-1.0)
     s = System()
-    a = s.add("a", rod_model(1e6), 0.5, 2)
+    a = s.add("a", solid_rod(1e6), 0.5, 2)
     ball = s.add("ball", PointMass(1.0, 3), initial=PointMass.initial((0, 0, 1.0), (0, 0, 0)))
     with pytest.raises(ConstraintError, match="rigid"):   # (a sphere of radius > 0: tests/models/test_rigid_rod_contact.py)
         s.contact(RodContact(1.0, 0.01, radius_b=0.0), a, ball)

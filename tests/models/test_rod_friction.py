@@ -17,7 +17,7 @@ from test_rod_contact import hairpin
 
 from rodfem import Load, Support, System, run
 from rodfem.core.bodycontact import BodyContacts, close_pairs
-from rodfem.demos.rod_collision import scene, straight
+from rodfem.demos.rod_collision import scene, solid_rod, straight
 from rodfem.errors import InputError
 from rodfem.fem.jit import compile_forms
 from rodfem.forms import cosserat_rod
@@ -28,17 +28,6 @@ from rodfem.forms.string_materials import logarithmic
 
 G, R_TUBE, RHO = 9.81, 0.01, 1750.0
 FRICTION = Coulomb(mu_s=0.4, mu_k=0.2, eps=2e-4, v_s=1e-3)
-
-
-def column(result, name):
-    return np.array([row[name] for row in result.rows])
-
-
-def rod_model(E, r=R_TUBE, rho=RHO):
-    A, Isec = np.pi * r**2, np.pi * r**4 / 4
-    Gs = E / 3
-    return cosserat_rod.CosseratRod(rho * A, (rho * 2 * Isec, rho * Isec, rho * Isec), [1 / (E * A), 1 / (Gs * A), 1 / (Gs * A)],
-                                    [1 / (Gs * 2 * Isec), 1 / (E * Isec), 1 / (E * Isec)])
 
 
 BAR, BAR_E = 0.05, 1e10   # the crossbars: short and stiff (the friction bends them sideways: a spring under a)
@@ -52,7 +41,7 @@ def block_on_rods(v0=0.0, pull=0.0, friction=FRICTION, La=0.1):
     crossings are in the middles of a's segments (they move along a as it slides: a crossing that passed a
     node of a would meet the neighbouring segment's end, forms/rod_contact.py) and at b's and c's middle
     nodes.  Returns (system, mass of a)."""
-    model = rod_model(1e9)
+    model = solid_rod(1e9)
     m = model.rhoA * La
     W = m * G
     k = stiffness_for(W, 1e-4)
@@ -62,7 +51,7 @@ def block_on_rods(v0=0.0, pull=0.0, friction=FRICTION, La=0.1):
     a = s.add("a", model, La, 2, initial=straight((0, 0, z), (1, 0, 0), (0, 0, 1), (v0, 0, 0), La),
               loads=[Load("v", [pull * FRICTION.mu_s * W / La, 0.0, -model.rhoA * G], "domain", "weight")])
     for name, x in (("b", -3 * La / 8), ("c", 3 * La / 8)):
-        bar = s.add(name, rod_model(BAR_E), BAR, 2, initial=straight((x, 0, 0), (0, 1, 0), (1, 0, 0), (0, 0, 0), BAR),
+        bar = s.add(name, solid_rod(BAR_E), BAR, 2, initial=straight((x, 0, 0), (0, 1, 0), (1, 0, 0), (0, 0, 0), BAR),
                     supports=[Support("left"), Support("right")])
         s.contact(RodContact(k, R_TUBE, friction=friction), a, bar, name=f"rub_{name}")
     s.record(bottom("a"))
@@ -98,7 +87,7 @@ def roller(v0, r_a=R_TUBE, tube=False, La=0.1, friction=FRICTION):
     d = r_a + R_TUBE - 1e-4 / np.sqrt(2)   # at rest: two segment pairs of a (meeting at its middle node) carry W
     a = s.add("a", model, La, 2, initial=straight((0.2 / 16, 0, d), (0, 1, 0), (0, 0, 1), (v0, 0, 0), La),
               loads=[Load("v", [0.0, 0.0, -model.rhoA * G], "domain", "weight")])
-    b = s.add("b", rod_model(E), 0.2, 4, initial=straight((0, 0, 0), (1, 0, 0), (0, 0, 1), (0, 0, 0), 0.2),
+    b = s.add("b", solid_rod(E), 0.2, 4, initial=straight((0, 0, 0), (1, 0, 0), (0, 0, 1), (0, 0, 0), 0.2),
               supports=[Support("left"), Support("right")])
     s.contact(RodContact(k, r_a, radius_b=R_TUBE, friction=friction), a, b, name="rub")
     return s, m, rhoJ[0] * La, r_a * d / (r_a + R_TUBE)
@@ -140,9 +129,9 @@ def test_a_rod_sliding_across_a_rod_spins_up_until_it_rolls(r_a, tube):
     result = run(s, h, 0.025)
     k = m * rho**2 / inertia
     assert k == pytest.approx(1.0 if tube else 2.0, rel=1e-2)
-    rolled = column(result, "t") > 1.3 * v0 / ((1 + k) * FRICTION.mu_k * G)   # the slip falls at mu_k g (1 + k)
-    v, omega = column(result, "a.p_x") / m, column(result, "a.Lc_y") / inertia   # (rolling along +x: spin about +y)
-    assert np.abs(v[:5] - v0 + FRICTION.mu_k * G * column(result, "t")[:5]).max() < 2e-2 * v0   # sliding: mu_k g
+    rolled = result.column("t") > 1.3 * v0 / ((1 + k) * FRICTION.mu_k * G)   # the slip falls at mu_k g (1 + k)
+    v, omega = result.column("a.p_x") / m, result.column("a.Lc_y") / inertia   # (rolling along +x: spin about +y)
+    assert np.abs(v[:5] - v0 + FRICTION.mu_k * G * result.column("t")[:5]).max() < 2e-2 * v0   # sliding: mu_k g
     # rolling: the means (the contact excites a's torsion: the section at the contact turns by ~1 % against the
     # rod's mean spin, and v, omega swap that much back and forth)
     assert v[rolled].mean() == pytest.approx(v0 * k / (1 + k), rel=2e-3)
@@ -150,7 +139,7 @@ def test_a_rod_sliding_across_a_rod_spins_up_until_it_rolls(r_a, tube):
     assert np.abs(m * v + inertia * omega / rho - m * v0).max() < 1e-3 * m * v0   # the impulses' invariant
     kinetic = 0.5 * m * v**2 + 0.5 * inertia * omega**2
     assert kinetic[rolled].mean() == pytest.approx(0.5 * m * v0**2 * k / (1 + k), rel=1e-3)
-    lost = column(result, "dissipated")   # when the slip first vanishes (later the torsion's slip adds a little)
+    lost = result.column("dissipated")   # when the slip first vanishes (later the torsion's slip adds a little)
     assert lost[np.argmax(v - rho * omega <= 0)] == pytest.approx(0.5 * m * v0**2 / (1 + k), rel=3e-3)
     assert np.diff(lost).min() >= 0
     assert result.max_balance_error <= 1e-12 * 0.5 * m * v0**2
@@ -164,16 +153,16 @@ def test_a_rod_sliding_lengthwise_across_two_rods_stops_like_a_block():
     v0, mu, h = 0.05, FRICTION.mu_k, 1e-3
     s, m = block_on_rods(v0=v0)
     result = run(s, h, 0.035)
-    t, x = column(result, "t"), column(result, "a0_x")
+    t, x = result.column("t"), result.column("a0_x")
     v, tm = np.diff(x) / h, 0.5 * (t[1:] + t[:-1])
     sliding = v > 5 * FRICTION.v_s
     slope = np.polyfit(tm[sliding], v[sliding], 1)[0]
     assert slope == pytest.approx(-mu * G, rel=1.5e-2)
     assert x[-1] - x[0] == pytest.approx(v0**2 / (2 * mu * G), rel=1e-2)
     assert np.abs(v[tm > 0.03]).max() < 3 * FRICTION.eps
-    its = column(result, "newton_its")[1:]   # the friction's derivatives in Newton's matrix: few iterations,
+    its = result.column("newton_its")[1:]   # the friction's derivatives in Newton's matrix: few iterations,
     assert its[sliding].max() <= 4 and its.sum() <= 200   # more where the slip meets eps
-    lost = np.diff(column(result, "dissipated"))
+    lost = np.diff(result.column("dissipated"))
     assert lost.min() >= 0 and lost.sum() > 0.9 * 0.5 * m * v0**2
     assert result.max_balance_error <= 1e-12 * 0.5 * m * v0**2
 
@@ -193,7 +182,7 @@ def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
     s, m = block_on_rods(pull=pull)
     h = 1e-3
     result = run(s, h, 0.03)
-    t, x = column(result, "t"), column(result, "a0_x")
+    t, x = result.column("t"), result.column("a0_x")
     v, tm = np.diff(x) / h, 0.5 * (t[1:] + t[:-1])
     late = t >= 0.015
     if pull < 1:
@@ -203,8 +192,8 @@ def test_a_pulled_rod_sticks_below_mu_s_N_and_slides_above(pull):
     else:
         slope = np.polyfit(tm[tm > 0.015], v[tm > 0.015], 1)[0]
         assert slope == pytest.approx((pull * FRICTION.mu_s - FRICTION.mu_k) * G, rel=1e-2)
-    assert np.diff(column(result, "dissipated")).min() >= 0
-    assert result.max_balance_error <= 1e-12 * max(np.abs(column(result, "H")).max(), 1e-12)
+    assert np.diff(result.column("dissipated")).min() >= 0
+    assert result.max_balance_error <= 1e-12 * max(np.abs(result.column("H")).max(), 1e-12)
 
 
 def rub(system=False, **over):
@@ -226,24 +215,24 @@ def test_two_free_rods_rubbing_keep_momentum_and_the_balance(rule):
     p, result = rub(integrator=rule)
     scale = 0.5 * RHO * np.pi * R_TUBE**2 * p["L"] * p["V"]
     for k in ("p_x", "p_y", "p_z"):
-        assert np.abs(column(result, k) - result.rows[0][k]).max() <= 1e-14 * scale, k
-    N, Ft = column(result, "touch.N"), np.hypot(column(result, "touch.Ft_x"), column(result, "touch.Ft_y"))
+        assert np.abs(result.column(k) - result.rows[0][k]).max() <= 1e-14 * scale, k
+    N, Ft = result.column("touch.N"), np.hypot(result.column("touch.Ft_x"), result.column("touch.Ft_y"))
     assert N.max() > 0 and Ft[np.argmax(N)] == pytest.approx(p["mu"] * N.max(), rel=2e-2)
-    Mf = np.column_stack([column(result, f"touch.Mf_{c}") for c in "xyz"])
-    L = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
+    Mf = np.column_stack([result.column(f"touch.Mf_{c}") for c in "xyz"])
+    L = np.column_stack([result.column(f"L_{c}") for c in "xyz"])
     assert np.abs(L - L[0]).max() <= 1e-13 * scale * p["L"]    # (the centrelines' force pair: 2e-5)
     assert np.abs(Mf).max() <= 1e-13 * scale * p["L"] / p["dt"]
     # rod b (along y) rubbed along x spins about its axis by the couples' angular impulse: -sum h rho Ft_x, the arm
     # rho = d / 2 = r - penetration / 2 (measured: to 3e-4; the arm r would give 2 % more)
-    arm = R_TUBE - 0.5 * column(result, "touch.penetration")
-    impulse = -np.cumsum(p["dt"] * arm * column(result, "touch.Ft_x"))
-    assert column(result, "b.Lc_y") == pytest.approx(impulse, rel=1e-3, abs=1e-3 * impulse[-1])
-    assert impulse[-1] > 0.5 * p["mu"] * column(result, "touch.N").max() * p["dt"] * R_TUBE
-    assert column(result, "newton_its").max() <= 4   # (the friction's derivatives in Newton's matrix: 2 to 3)
-    lost = np.diff(column(result, "dissipated"))
+    arm = R_TUBE - 0.5 * result.column("touch.penetration")
+    impulse = -np.cumsum(p["dt"] * arm * result.column("touch.Ft_x"))
+    assert result.column("b.Lc_y") == pytest.approx(impulse, rel=1e-3, abs=1e-3 * impulse[-1])
+    assert impulse[-1] > 0.5 * p["mu"] * result.column("touch.N").max() * p["dt"] * R_TUBE
+    assert result.column("newton_its").max() <= 4   # (the friction's derivatives in Newton's matrix: 2 to 3)
+    lost = np.diff(result.column("dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
     if rule == "discrete-gradient":
-        assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+        assert result.max_balance_error <= 1e-12 * result.column("H").max()
 
 
 def test_self_contact_with_friction_keeps_momentum_and_the_balance():
@@ -253,11 +242,11 @@ def test_self_contact_with_friction_keeps_momentum_and_the_balance():
     s, KE, k = hairpin(contact=False)
     s.contact(RodContact(k, R_TUBE, friction=Coulomb(0.5)), s.bodies["hairpin"], name="self")
     result = run(s, 8e-4, 0.064)
-    assert column(result, "self.N").max() > 0
+    assert result.column("self.N").max() > 0
     for key in ("p_x", "p_y", "p_z", "L_x", "L_y", "L_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14, key
-    assert np.allclose(column(result, "self.Ft_x"), 0.0)   # (self-contact: no force "on body a")
-    lost = np.diff(column(result, "dissipated"))
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14, key
+    assert np.allclose(result.column("self.Ft_x"), 0.0)   # (self-contact: no force "on body a")
+    lost = np.diff(result.column("dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
     assert result.max_balance_error <= 1e-12 * KE
 
@@ -273,22 +262,22 @@ def test_a_string_rubbing_a_rod_keeps_p_and_the_balance_and_L_changes_by_the_str
     a = s.add("a", String(logarithmic(EA=50.0), rhoA), 0.5, 10,
               initial={"r": lambda x: np.vstack([x[0] - 0.25, 0 * x[0] + 0.013, 0 * x[0] + 0.011]),
                        "v": lambda x: np.vstack([0 * x[0] + 0.2, 0 * x[0], 0 * x[0] - V / 2])})
-    b = s.add("b", rod_model(1e7), 0.5, 6, initial=straight((0.017, 0, -0.011), (0, 1, 0), (0, 0, 1), (0, 0, V / 2), 0.5))
+    b = s.add("b", solid_rod(1e7), 0.5, 6, initial=straight((0.017, 0, -0.011), (0, 1, 0), (0, 0, 1), (0, 0, V / 2), 0.5))
     k = 1.5 * (0.25 * rhoA * 0.5) * V**2 / 1e-3**3
     s.contact(RodContact(k, r, friction=Coulomb(0.3)), a, b, name="rub")
     h = 2e-4
     result = run(s, h, 0.01)
-    assert column(result, "rub.N").max() > 0
+    assert result.column("rub.N").max() > 0
     scale = rhoA * 0.5 * V
     for key in ("p_x", "p_y", "p_z"):
-        assert np.abs(column(result, key) - result.rows[0][key]).max() <= 1e-14 * scale, key
-    Mf = np.column_stack([column(result, f"rub.Mf_{c}") for c in "xyz"])
-    L = np.column_stack([column(result, f"L_{c}") for c in "xyz"])
-    assert np.abs(Mf).max() > 1e-3 * r * 0.3 * column(result, "rub.N").max()
+        assert np.abs(result.column(key) - result.rows[0][key]).max() <= 1e-14 * scale, key
+    Mf = np.column_stack([result.column(f"rub.Mf_{c}") for c in "xyz"])
+    L = np.column_stack([result.column(f"L_{c}") for c in "xyz"])
+    assert np.abs(Mf).max() > 1e-3 * r * 0.3 * result.column("rub.N").max()
     assert np.abs(np.diff(L, axis=0) - h * Mf[1:]).max() <= 1e-13 * scale * 0.5
-    lost = np.diff(column(result, "dissipated"))
+    lost = np.diff(result.column("dissipated"))
     assert lost.min() >= 0 and lost.max() > 0
-    assert result.max_balance_error <= 1e-12 * column(result, "H").max()
+    assert result.max_balance_error <= 1e-12 * result.column("H").max()
 
 
 def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
@@ -301,7 +290,7 @@ def test_the_pattern_grown_at_once_gives_the_same_history(monkeypatch):
     _, inserted, s = rub(system=True, n_elements=6, t_end=0.02)
     assert s.assembler.A.getInfo()["mallocs"] > 0
     for key in ("H", "dissipated", "L_y", "touch.N", "touch.Ft_x", "pz_a", "pz_b"):
-        a, b = column(grown, key), column(inserted, key)
+        a, b = grown.column(key), inserted.column(key)
         assert np.abs(a - b).max() <= 1e-9 * max(np.abs(b).max(), 1e-12), key
 
 
