@@ -128,9 +128,13 @@ def run_static(scene, overrides=None, out=None, t=None, steps=1, adaptive=True, 
                 summary["warning"] = (f"the equilibrium is {summary['error_relative']:.3g} of the scale away from the "
                                       f"scene's exact solution (more than {INACCURATE:g}): the mesh "
                                       f"(n_elements = {problem.n_elements}) does not resolve it; refine it")
-        if outdir:   # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it
+        # the equilibrium as a checkpoint at step 0: `rodfem run --resume out` starts from it (not for bodies
+        # placed whole on ranks: their checkpoints are not written yet, rodfem/io/checkpoint.py)
+        summary["checkpoint"] = bool(outdir) and not getattr(problem, "distributed", False)
+        if summary["checkpoint"]:
             checkpoint.save(outdir, problem, checkpoint.Layout(problem), 0, None, problem.hamiltonian(), 0.0,
                             {"scene": scene.name, "parameters": p, "checkpoint_every": 0, "static_time": t})
+        if outdir:
             writer.frame(1.0)
             rows.close()
         t1 = time.perf_counter()

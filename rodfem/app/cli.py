@@ -132,8 +132,11 @@ def cmd_static(args):
     if summary.get("warning"):
         say(f"warning: {summary['warning']}")
     say(verdict(summary["stability"]))
-    say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png, checkpoint.npz "
-        f"(a dynamic run from this equilibrium: rodfem run --resume {out} --out NEWDIR)")
+    if summary.get("checkpoint"):
+        say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png, checkpoint.npz "
+            f"(a dynamic run from this equilibrium: rodfem run --resume {out} --out NEWDIR)")
+    else:   # (bodies placed whole on ranks: no checkpoint)
+        say(f"results in {out}/: summary.json, loadsteps.csv, centreline.pvd, shapes.png")
 
 
 def cmd_linearize(args):

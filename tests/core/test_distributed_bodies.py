@@ -242,3 +242,21 @@ def test_placement_keeps_joined_bodies_together():
     assert cut(owners([1] * len(strings), 2)) >= (n - 2) ** 2          # (no links: the order added)
     placed = owners([1] * len(strings), 2, links)
     assert np.bincount(placed).tolist() == [len(strings) // 2] * 2 and cut(placed) <= 3 * n
+
+
+@pytest.mark.mpi
+def test_statics_of_placed_bodies_equal_serial_without_a_checkpoint(tmp_path):
+    """`rodfem static cable-net` on 2 ranks (strings placed whole on ranks): the equilibrium's summary equals
+    the serial one to 1e-9, and no step-0 checkpoint is written (it failed at the end, after the solve)."""
+    from processes import rodfem, summary
+    a, b = tmp_path / "np1", tmp_path / "np2"
+    for out, np_ in ((a, None), (b, 2)):
+        p = rodfem("static", "cable-net", "--out", out, np=np_, timeout=300)
+        assert p.returncode == 0, p.stderr[-3000:]
+    sa, sb = summary(a), summary(b)
+    assert sa["checkpoint"] and (a / "checkpoint.npz").exists()
+    assert not sb["checkpoint"] and not (b / "checkpoint.npz").exists() and sb["status"] == "completed"
+    floats = [k for k, v in sa.items() if isinstance(v, float) and "time" not in k]
+    assert floats
+    for k in floats:
+        assert sb[k] == pytest.approx(sa[k], rel=1e-9, abs=1e-12), k
