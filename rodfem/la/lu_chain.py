@@ -16,10 +16,10 @@ from petsc4py import PETSc
 # a zero pivot there, SuperLU takes 157 / 9.7 ms, MUMPS 390 / 27 ms.  (PETSc's own remedy,
 # -pc_factor_nonzeros_along_diagonal, gave 26 / 3.1 ms there but a factor too inaccurate for
 # Newton on the tendon arm, and a segmentation fault on its full element pattern.)  An unpivoted
-# LU reached that way that then fails Newton (a small pivot, not a zero one) hands over to the
-# next LU too.  SuperLU's 32-bit memory index runs out on large matrices (the 3D rod at 10^4
-# elements, 1e8 nonzeros: "Not enough memory", and destroying that failed factor crashes): above
-# SUPERLU_NONZEROS MUMPS comes straight after.
+# LU reached that way that then fails Newton with an inaccurate factor (a small pivot, not a zero
+# one: rodfem/nls/newton.py, ACCURATE_LU) hands over to the next LU too.  SuperLU's 32-bit memory
+# index runs out on large matrices (the 3D rod at 10^4 elements, 1e8 nonzeros: "Not enough memory",
+# and destroying that failed factor crashes): above SUPERLU_NONZEROS MUMPS comes straight after.
 LU_CHAIN = {"petsc": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "rcm"},
             "schur": {"pc_type": "python", "pc_python_type": "rodfem.la.schur.InterfaceSchur"},
             "petsc-amd": {"pc_type": "lu", "pc_factor_mat_solver_type": "petsc", "pc_factor_mat_ordering_type": "amd"},
@@ -58,3 +58,36 @@ def mumps_options(prefix):
     for key, value in (("mat_mumps_icntl_7", 0), ("mat_mumps_icntl_14", 300)):
         if not opts.hasName(prefix + key):
             opts[prefix + key] = value
+
+
+def backward_error(A, solve, b=None):
+    """|A x - b| / |b| of x = solve(b) (a factor's accuracy: round-off for a stable LU, large after a small
+    pivot of an unpivoted one); b = A x* for a fixed x* (entries 1 to 2) when not given.  inf when the
+    solve raises or returns non-finite values; nan when b is not finite (then A or b says nothing of
+    the factor)."""
+    import numpy as np
+    made = []
+    if b is None:
+        xs = A.createVecRight()
+        lo, hi = xs.getOwnershipRange()
+        xs.getArray()[:] = 1.0 + np.arange(lo, hi) % 7 / 7.0
+        b = A.createVecLeft()
+        A.mult(xs, b)
+        made += [xs, b]
+    x, r = A.createVecRight(), A.createVecLeft()
+    made += [x, r]
+    try:
+        nb = b.norm()
+        if not np.isfinite(nb):
+            return float("nan")
+        try:
+            solve(b, x)
+        except PETSc.Error:
+            return float("inf")
+        A.mult(x, r)
+        r.axpy(-1.0, b)
+        e = r.norm() / nb if nb else r.norm()
+        return e if np.isfinite(e) else float("inf")
+    finally:
+        for v in made:
+            v.destroy()

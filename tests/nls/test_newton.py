@@ -94,6 +94,59 @@ def test_a_zero_pivot_moves_down_the_lu_chain():
     assert errors[1] <= errors[0] / 3, errors
 
 
+def test_backward_error_tells_a_small_pivot_from_an_accurate_factor():
+    """[[d, 1], [1, 1]] with d = 1e-18: PETSc's LU in natural order takes d as its pivot (the
+    multiplier 1e18 swamps the 1 of the corner: backward error of order 1), SuperLU pivots (round-off);
+    the same unpivoted LU with d = 2 is exact.  (Newton's test for handing over to the next LU.)"""
+    from petsc4py import PETSc
+
+    from rodfem.la.lu_chain import backward_error
+
+    def error(d, solver, ordering="natural"):
+        A = PETSc.Mat().createAIJ([2, 2], nnz=2, comm=PETSc.COMM_SELF)
+        A.setValues([0, 1], [0, 1], [d, 1.0, 1.0, 1.0])
+        A.assemble()
+        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+        ksp.setOperators(A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType(solver)
+        if solver == "petsc":
+            ksp.getPC().setFactorOrdering(ordering)
+        try:
+            return backward_error(A, ksp.solve)
+        finally:
+            ksp.destroy()
+            A.destroy()
+
+    assert error(1e-18, "petsc") > 1e-3
+    assert error(1e-18, "superlu") <= 1e-15
+    assert error(2.0, "petsc") <= 1e-15
+
+
+@pytest.mark.skipif(COMM.size > 1, reason="the serial LU chain")
+def test_a_step_too_large_for_newton_keeps_the_partial_lu():
+    """16 rigid links, h = 0.1: Newton fails a step (any LU would: the step control halves it) while
+    the partial LU's factor is accurate, so the run keeps it (it used to hand over to SuperLU for the
+    rest of the run, 3x slower at 256 links); the trajectory equals a run with SuperLU from the start
+    (pivoting: an independent factor) to Newton's tolerance."""
+    scene = load("chain-1000")
+    p = scene.values({"n_links": 16, "dt": 0.1, "t_end": 1.0})
+    problem = scene.build(p, MPI.COMM_WORLD)
+    res = run(problem, p["dt"], p["t_end"])
+    assert res.stepping["rejected"] >= 1, res.stepping
+    assert problem.newton.linear_solver == "schur(rcm)"
+    pivoting = scene.build(p, MPI.COMM_WORLD)
+    pivoting.build()
+    pivoting.newton.use_lu("superlu")
+    ref = run(pivoting, p["dt"], p["t_end"])
+    assert pivoting.newton.linear_solver == "superlu"
+    assert ref.stepping["rejected"] == res.stepping["rejected"]
+    for col in ("H", "tip_x", "tip_y"):
+        assert np.max(np.abs(res.column(col) - ref.column(col))) <= 1e-8 * np.max(np.abs(ref.column(col)))
+    assert res.max_balance_error <= 1e-12 * np.max(np.abs(res.column("H")))
+
+
 # -- on a scene: the chord Newton and the options database ------------------------------------
 
 def spaghetti(newton_options=None, **overrides):
