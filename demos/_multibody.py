@@ -26,15 +26,17 @@ def rigid_frame(body, state="x1"):
     return x, R
 
 
-def orthonormality(*bodies, state="x1", comm=None):
+def orthonormality(*bodies, state="x1", comm=None, system=None):
     """max |R^T R - I| over the nodes of director-based bodies (rigid or rods), every rank of `comm`
-    (default: the first body's): each rank its own nodes, then one reduction.  A System's bodies
-    on this rank: ``orthonormality(*(b for _, b in system.body_items()), comm=system.comm)``."""
-    worst = 0.0
-    for body in bodies:
-        R = np.stack([body.space.nodal(getattr(body, state), d)[1] for d in DIRECTORS], axis=2)
-        if len(R):
-            worst = max(worst, float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)))))
+    (default: the first body's): each rank its own nodes, then one reduction.  ``system=``: every
+    body of a System with directors, read from its state in one indexing (System.field_values)."""
+    if system is not None:
+        R = np.stack([system.field_values(d, state) for d in DIRECTORS], axis=2)
+        comm = system.comm
+    else:
+        R = np.concatenate([np.stack([b.space.nodal(getattr(b, state), d)[1] for d in DIRECTORS], axis=2)
+                            for b in bodies])
+    worst = float(np.max(np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)))) if len(R) else 0.0
     return (comm or bodies[0].comm).allreduce(worst, op=MPI.MAX)
 
 

@@ -70,7 +70,7 @@ def build(p, comm):
         chain.join(hinge, links[k - 1].point((0.5 * l, 0.0, 0.0)), links[k].point((-0.5 * l, 0.0, 0.0)),
                    name=f"hinge{k}")
     chain.marker("tip", links[-1].point((0.5 * l, 0.0, 0.0)))
-    chain.record(lambda s: {"orthonormality": orthonormality(*(b for _, b in s.body_items()), comm=s.comm)})
+    chain.record(lambda s: {"orthonormality": orthonormality(system=s)})
     return chain
 
 

@@ -283,6 +283,15 @@ class CosseratRod:
     kinematics = {"r": "v", "d1": "w1", "d2": "w2", "d3": "w3"}   # configuration -> velocity: what joints act on
     frame = staticmethod(lambda q, offset=(): director_frame(q, "r", offset))
     quadrature_degree = 4                     # integrands are at most P1 x P1 x P2 (degree 4): exact
+
+    @staticmethod
+    def default_initial():
+        """A body placed without initial values: straight along x from the origin, r(s) = s e1, d_i = e_i,
+        at rest (its stress-free reference)."""
+        init = {"r": lambda x: np.vstack([x[0], np.zeros_like(x[0]), np.zeros_like(x[0])])}
+        for i, d in enumerate(DIRECTORS):
+            init[d] = lambda x, e=np.eye(3)[i]: np.outer(e, np.ones(x.shape[1]))
+        return init
     # what the output writes (rodfem/io/snapshot.py): descriptions and component names
     labels = {**{d: (f"director {d} (d1 the axis, d2 and d3 span the section)", ("x", "y", "z")) for d in DIRECTORS},
               "v": ("velocity d_t r of the centreline", ("x", "y", "z")),

@@ -198,6 +198,12 @@ class PlanarBeam:
     # SI units of the written arrays (with the scene's parameters in SI); "1": dimensionless
     units = {"r": "m", "phi": "rad", "v": "m/s", "omega": "rad/s", "Gamma": "1", "kappa": "1/m", "N": "N", "M": "N m"}
     frame = staticmethod(lambda q, offset=(): planar_frame(q, "r", offset))
+
+    @staticmethod
+    def default_initial():
+        """A body placed without initial values: straight along x from the origin, r(s) = (s, 0),
+        phi = 0, at rest (its stress-free reference)."""
+        return straight((0.0, 0.0), (1.0, 0.0))[1]
     projects = False   # True: the efforts N, M are projected fields at every degree (a subclass whose N is not DG_{k-1})
 
     def __init__(self, rhoA, rhoI, energy, degree=1, gauss_points=None, branches=(), damping=None):

@@ -167,6 +167,11 @@ class RigidBody:
     quadrature_degree = 0
     frame = staticmethod(lambda q, offset=(): director_frame(q, "x", offset))
 
+    @staticmethod
+    def default_initial():
+        """A body placed without initial values: at the origin, d_i = e_i, at rest."""
+        return RigidBody.initial((0.0, 0.0, 0.0))
+
     def __init__(self, mass, inertia):
         if not (np.isfinite(mass) and mass > 0):
             raise ValueError(f"mass must be a positive number (got {mass!r})")

@@ -121,6 +121,12 @@ class String:
     kinematics = {"r": "v"}   # configuration -> velocity: what joints act on
 
     @staticmethod
+    def default_initial():
+        """A body placed without initial values: straight along x from the origin, r(s) = s e1, at rest
+        (its reference: C = 1)."""
+        return {"r": lambda x: np.vstack([x[0], np.zeros_like(x[0]), np.zeros_like(x[0])])}
+
+    @staticmethod
     def frame(q, offset=()):
         """A string point has a position only (no offset)."""
         if len(offset) and any(offset):

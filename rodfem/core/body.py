@@ -76,7 +76,8 @@ class Body:
 
         self.dx = ufl.Measure("dx", domain=self.mesh, metadata={"quadrature_degree": model.quadrature_degree})
         self.ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=self.end_tags)
-        self._set_initial(initial or {})
+        # no initial values: the model's own default (a rod straight along x at rest), where it has one
+        self._set_initial(initial or (model.default_initial() if hasattr(model, "default_initial") else {}))
         for load in self.loads:
             load.bind(self.mesh, S)
         self.bcs = [bc for sup in self.supports for bc in sup.conditions(S, model, self.facets, self.state0)]

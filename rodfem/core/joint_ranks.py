@@ -37,7 +37,11 @@ class RankJoints:
         counted = [bool(self._here(j.lam_index[:1]).all()) for j in mine]
         self.batch = JointBatch(mine, fixed, at=at, own=(self.lo, self.hi), counted=counted) if mine else None
         self.rows = self.batch._res_rows - self.lo if self.batch is not None else None
-        self.repeated = self.rows is not None and len(np.unique(self.rows)) < len(self.rows)   # (a point of 2 joints)
+        # a point of two joints: its rows repeat, their terms summed by bincount over the distinct rows
+        # (np.add.at: 0.12 ms a residual at 256 links, a third of the joints' step work)
+        self.distinct, self.inverse = (np.unique(self.rows, return_inverse=True) if self.rows is not None
+                                       else (None, None))
+        self.repeated = self.rows is not None and len(self.distinct) < len(self.rows)
         self.x0 = None
 
     def _here(self, index):
@@ -66,7 +70,7 @@ class RankJoints:
         """Add the terms to this rank's rows of b (the array of this rank's part)."""
         if self.batch is not None and len(self.rows):
             if self.repeated:
-                np.add.at(b, self.rows, self.batch.residual_values())
+                b[self.distinct] += np.bincount(self.inverse, self.batch.residual_values(), len(self.distinct))
             else:
                 b[self.rows] += self.batch.residual_values()
 

@@ -119,6 +119,8 @@ class System:
             initial: Optional[dict] = None, shape=None, contacts=()) -> BodyRef:
         """Place a body: a flexible one on [0, length] with n_elements cells (or `shape` = (length,
         initial), e.g. rodfem.forms.planar_beam.straight(a, b)), or a rigid one (initial values only).
+        Without `initial` a body starts in its model's `default_initial()` (a rod straight along x from
+        the origin, a rigid body at the origin with d_i = e_i, both at rest).
         `contacts`: the body's interactions (rodfem/core/body.py), e.g. forms/contact.py's contacts
         with obstacles; their columns are named body.column."""
         if not isinstance(name, str) or name in self.bodies or not name or "." in name:
@@ -803,6 +805,29 @@ class System:
     def body_items(self):
         """[(name, Body)] in the order of the block vector (the bodies of this rank, when placed on ranks)."""
         return [(ref.name, ref.body) for ref in self._local_refs()]
+
+    def field_values(self, name: str, state: str = "x1") -> np.ndarray:
+        """The values of field `name` at this rank's nodes of its bodies that have the field, rows [n, size] in
+        the order of the block vector (a rigid body: one row), from x_n ("x0") or x_{n+1} ("x1"): one copy of
+        the state and one indexing, whatever the number of bodies (a history column over 1000 rigid links)."""
+        self.build()
+        if ("values", name) not in self._copies:
+            index, size = [], None
+            for blk, ref in zip(self.blocks, self._local_refs()):
+                body = ref.body
+                if name not in [f.name for f in body.space.fields]:
+                    continue
+                size = body.space.field(name).size
+                dofs = body.space.field_dofs(name) if body.rigid else body.space.collapse(name)[1]
+                dofs = np.asarray(dofs, dtype=np.int64).ravel()
+                index.append(blk.lo + dofs[dofs < blk.hi - blk.lo])
+            self._copies[("values", name)] = (np.concatenate(index) if index else np.zeros(0, np.int64), size or 1)
+        index, size = self._copies[("values", name)]
+        if ("work", state) not in self._copies:
+            self._copies[("work", state)] = self.layout.create_vector()
+        X = self._copies[("work", state)]
+        self._pull(X, state)
+        return X.getArray(readonly=True)[index].reshape(-1, size)
 
     @property
     def named_bodies(self) -> bool:

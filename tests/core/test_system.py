@@ -129,6 +129,54 @@ def test_rigid_body_spins_with_orthonormal_directors():
     assert np.max(np.abs(D.T @ D - np.eye(3))) <= 1e-13
 
 
+def test_field_values_are_every_bodys_nodal_values():
+    """System.field_values reads a field of all of the rank's bodies in one indexing: the same rows as
+    each body's own nodal values (a rigid body: one row; a 3D rod: its nodes), x_n and x_{n+1} apart
+    after a step; a body without the field (a point mass has no directors) adds no row."""
+    s = System()
+    a = s.add("a", RigidBody(2.0, (1.0, 2.0, 3.0)), initial=RigidBody.initial([0, 0, 0], np.eye(3), omega=[0.1, 3.0, 0.2]))
+    rod = s.add("rod", CosseratRod(1.0, (1.0, 0.5, 0.5), (0.1, 0.1, 0.1), (0.1, 0.1, 0.1)), length=1.0, n_elements=3,
+                loads=[Load("v", [0.0, 0.0, -1.0], "domain", "weight")])
+    m = s.add("m", PointMass(1.0, 3), initial=PointMass.initial([2.0, 0.0, 0.0], [0.0, 1.0, 0.0]))
+    run(s, 0.01, 0.01)
+    rod.body.x1.x.array[:] += np.linspace(0.1, 0.2, rod.body.x1.x.array.size)   # x_{n+1} apart from x_n
+    for state in ("x0", "x1"):
+        for name, bodies in (("d2", (a, rod)), ("x", (a, m)), ("r", (rod,))):
+            expected = np.concatenate([b.body.space.nodal(getattr(b.body, state), name)[1] for b in bodies])
+            got = s.field_values(name, state)
+            assert got.shape == expected.shape
+            assert np.array_equal(np.sort(got, axis=0), np.sort(expected, axis=0)), (state, name)
+    assert not np.array_equal(s.field_values("d2", "x0"), s.field_values("d2", "x1"))
+    assert s.field_values("d2").shape == (1 + 7, 3)   # the rigid body's row, the rod's P2 nodes
+
+
+@pytest.mark.parametrize("kind", ["beam", "rod", "string", "rigid"])
+def test_a_body_placed_without_initial_values_is_straight_at_rest(kind):
+    """No `initial`: the model's default, straight along x from the origin at rest (it was the zero state:
+    a rod of zero length, whose Jacobian is singular).  The body starts at r(s) = s e1 with H = 0 and
+    falls under its weight f per length: p(t) = f L t exactly (the midpoint rule integrates a constant
+    force exactly), unstretched (rigid translation: H = |p|^2 / 2m)."""
+    from rodfem.forms import string_materials
+    from rodfem.forms.string import String
+    dim = 2 if kind == "beam" else 3
+    g = [0.0, -1.0] if dim == 2 else [0.0, 0.0, -1.0]
+    model = {"beam": lambda: PlanarBeam(1.0, 0.1, quadratic(10.0, 10.0, 1.0)),
+             "rod": lambda: CosseratRod(1.0, (0.2, 0.1, 0.1), (0.1, 0.1, 0.1), (0.1, 0.1, 0.1)),
+             "string": lambda: String(string_materials.kirchhoff(EA=10.0), 1.0),
+             "rigid": lambda: RigidBody(1.0, (0.2, 0.1, 0.15))}[kind]()
+    s = System()
+    body = s.add("b", model, length=1.0, n_elements=4, loads=[Load("v", g, "domain", "weight")]).body
+    position = "x" if kind == "rigid" else "r"
+    if kind != "rigid":
+        sn, r = body.space.nodal(body.x0, position)
+        assert np.allclose(r[:, 0], sn) and np.allclose(r[:, 1:], 0.0)
+    res = run(s, 0.01, 0.1)
+    assert res.column("H")[0] == 0.0
+    p = res.column("p_y" if dim == 2 else "p_z")
+    assert np.max(np.abs(p - (-res.column("t")))) <= 1e-10
+    assert np.max(np.abs(res.column("H") - 0.5 * res.column("t") ** 2)) <= 1e-9
+
+
 def test_nothing_unused_is_assembled():
     """Each joint adds exactly its conditions to the unknowns; without joints there is no multiplier block."""
     full, _ = four_bar(t_end=0.02)
