@@ -127,6 +127,17 @@ class OutDir:
                 except OSError as e:
                     raise InputError(f"--out {self.path!r}: cannot {what} ({e.strerror or e}){hint}") from None
 
+    def do_each(self, tasks):
+        """Collective: the k-th of tasks [(what, fn, *args)] runs on rank k mod size (a second rank draws what
+        rank 0 would draw after its own work); an OSError on any rank ends the run on every rank (InputError)."""
+        with agreed(self.comm):
+            for k, (what, fn, *args) in enumerate(tasks):
+                if k % self.comm.size == self.comm.rank:
+                    try:
+                        fn(*args)
+                    except OSError as e:
+                        raise InputError(f"--out {self.path!r}: cannot {what} ({e.strerror or e})") from None
+
     @contextmanager
     def claimed(self, summary, clear=True):
         """Lock the directory, clear a previous run's files (not when `clear` is false: a run resumed
@@ -337,12 +348,16 @@ class RunWriter:
         even if one before failed (after a full disk, the summary may still fit), the first error raised."""
         errors = []
         for what, fn, *args in (("close history.csv", self._close),
-                                ("write summary.json", write_json, self.out.file("summary.json"), summary),
-                                ("write the plots", self._plots, result)):
+                                ("write summary.json", write_json, self.out.file("summary.json"), summary)):
             try:
                 self.out.do(what, fn, *args)
             except InputError as e:
                 errors.append(e)
+        framed = self.out.comm.bcast(bool(self.frames), root=0)   # (rank 0 writes and counts the frames)
+        try:   # the plots on rank 0, view.py (which reads every frame back) beside them on a second rank
+            self.out.do_each([("write the plots", self._plots, result), ("write view.py", self._view_script, framed)])
+        except InputError as e:
+            errors.append(e)
         if errors:
             raise errors[0]
 
@@ -354,14 +369,18 @@ class RunWriter:
     def _plots(self, result):
         if result is not None and result.rows:
             plot_energy(self.out.file("energy.png"), result)
-        if self.frames:
+        if self.snapshots:
+            plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
+            write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
+
+
+    def _view_script(self, framed):
+        """view.py: ParaView's view of the run, with the colour ranges and bounds of all its frames."""
+        if framed:
             from rodfem.io.paraview import run_facts, write_script
             units = {k: u for v in self.views for k, u in v.units.items()}
             facts = run_facts(self.out.path, "blocks" if len(self.views) > 1 else None)
             replace_atomically(self.out.file("view.py"), lambda tmp: write_script(tmp, facts, units))
-        if self.snapshots:
-            plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
-            write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
 
 
 def summarize(scene_name, params, problem, result, status="completed", failure=None):
