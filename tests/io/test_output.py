@@ -352,3 +352,41 @@ def test_pictures_name_the_bodies_only_when_there_are_few():
         return [SimpleNamespace(name=f"link{k}", kind="box") for k in range(n)]
     assert _names(bodies(1)) is None and _names(bodies(1000)) is None and _names(bodies(LEGEND + 1)) is None
     assert _names(bodies(3)) == ["link0", "link1", "link2"] and len(_names(bodies(LEGEND))) == LEGEND
+
+
+@pytest.mark.mpi
+def test_the_end_of_run_files_are_shared_out_and_a_failure_reaches_every_rank(tmp_path):
+    """OutDir.do_each: serially every task runs on rank 0, on two ranks the second on rank 1 (view.py
+    beside the plots); an OSError in a task on either rank ends the collective step with the same one-line
+    InputError on every rank, none left waiting (run under a timeout)."""
+    from processes import script_on_ranks
+    script = f"""
+import json, os
+from mpi4py import MPI
+from rodfem.errors import InputError
+from rodfem.io.output import OutDir
+comm = MPI.COMM_WORLD
+out = OutDir({str(tmp_path)!r} + "/n" + str(comm.size), comm)
+os.makedirs(out.path, exist_ok=True)
+ran = []
+out.do_each([("a", lambda: ran.append("a")), ("b", lambda: ran.append("b"))])
+errors = []
+for bad in (0, 1):
+    def fail():
+        raise OSError(28, "No space left on device")
+    tasks = [("write the plots", fail if bad == 0 else (lambda: None)),
+             ("write view.py", fail if bad == 1 else (lambda: None))]
+    try:
+        out.do_each(tasks)
+    except InputError as e:
+        errors.append(str(e))
+print(json.dumps({{"ran": comm.allgather(ran), "errors": comm.allgather(errors)}}))
+"""
+    serial, parallel = script_on_ranks(script, timeout=120)
+    assert serial["ran"] == [["a", "b"]]
+    assert parallel["ran"] == [["a"], ["b"]]
+    for row in (serial, parallel):
+        for errors in row["errors"]:
+            assert len(errors) == 2
+            assert "cannot write the plots (No space left on device)" in errors[0]
+            assert "cannot write view.py (No space left on device)" in errors[1]
