@@ -25,6 +25,7 @@ ROOT = os.path.dirname(HERE)
 CASES = [   # (scene, overrides, steps, what, rank counts)
     ("chain-1000", {"n_links": 16}, 200, "16 links (default)", (1, 2)),
     ("chain-1000", {"n_links": 100}, 20, "100 links", (1, 2)),
+    ("chain-1000", {"n_links": 256}, 200, "256 links, 1 s (its failed steps halved)", (1, 2)),
     ("chain-1000", {"n_links": 300}, 5, "300 links", (1,)),
     ("chain-1000", {"n_links": 1000}, 5, "1000 links", (1,)),   # (8 GB per process: not twice on this machine)
     ("tensegrity", {}, 200, "1 prism: 3 struts, 9 cables (default)", (1, 2)),
