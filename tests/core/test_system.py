@@ -301,3 +301,24 @@ def test_two_point_masses_under_a_domain_load_follow_the_closed_form():
         p = subprocess.run([*launcher, sys.executable, "-c", code], capture_output=True, text=True,
                            env=environment(), timeout=330)
         assert p.returncode == 0, p.stderr[-2000:]
+
+
+@pytest.mark.mpi
+def test_field_values_of_a_rod_split_over_ranks_count_each_node_once():
+    """A 3D rod of 8 elements (17 P2 nodes) on one and on two ranks: the ranks' rows of
+    System.field_values together are the 17 nodes, each once (owned entries only), equal to serial's."""
+    from processes import script_on_ranks
+    script = """
+import json
+import numpy as np
+from mpi4py import MPI
+from rodfem.core.system import System
+from rodfem.forms.cosserat_rod import CosseratRod
+s = System()
+s.add("rod", CosseratRod(1.0, (0.2, 0.1, 0.1), (0.1, 0.1, 0.1), (0.1, 0.1, 0.1)), length=2.0, n_elements=8)
+rows = np.concatenate(MPI.COMM_WORLD.allgather(s.field_values("r")))
+print(json.dumps({"r": sorted(rows[:, 0].tolist()), "others": float(np.abs(rows[:, 1:]).max())}))
+"""
+    serial, parallel = script_on_ranks(script, timeout=120)
+    assert np.allclose(serial["r"], np.linspace(0.0, 2.0, 17), atol=1e-14)
+    assert parallel == serial
