@@ -261,9 +261,9 @@ class Newton:
         reason = self.snes.getConvergedReason()
         lu = lu_name(self.settings)
         switched = lu != "petsc" and lu not in PIVOTING   # an unpivoted LU reached after a zero pivot
-        if (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE
-                or (reason <= 0 and switched and not self._lu_accurate())) \
-                and self.A.getComm().getSize() == 1 and lu in LU_CHAIN:
+        serial_chain = self.A.getComm().getSize() == 1 and lu in LU_CHAIN   # (the parallel solver's is inside it)
+        if serial_chain and (reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE
+                             or (reason <= 0 and switched and not self._lu_accurate())):
             following = next_lu(self.A, lu)
             if following is not None:
                 if lu == "petsc" and self._pattern is not None:   # (remembered for the next Newton on it)
