@@ -1298,7 +1298,7 @@ MUTATIONS = [
       [PLACED + "::test_driven_joint_between_ranks_equals_serial"],
       "a driven joint between two ranks' bodies has its supplied work counted on both"),
     M("placed-joint-rows-repeated", "rodfem/core/joint_ranks.py",
-      [("        self.repeated = self.rows is not None and len(np.unique(self.rows)) < len(self.rows)",
+      [("        self.repeated = self.rows is not None and len(self.distinct) < len(self.rows)",
         "        self.repeated = False")],
       [PLACED + "::test_driven_joint_between_ranks_equals_serial"],
       "two joints at one point: their residual rows added once (a fancy-indexed += keeps one of the two)"),
