@@ -439,7 +439,7 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
     also for a run resumed from a checkpoint at t_end: killed before its summary and pictures)."""
     from rodfem.io.animation import marks_sketch
     from rodfem.io.output import RunWriter
-    from rodfem.io.vtk import read_vtp
+    from rodfem.io.vtk import piece, read_vtp
 
     class ResumedWriter(RunWriter):
         def __init__(self):
@@ -472,10 +472,15 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
                                         for ds in ET.parse(marks).getroot().iter("DataSet")
                                         if float(ds.get("timestep")) <= t * (1 + 1e-12) + 1e-300]
                 joints = dict(self.mark_frames)
+                members = [b for _, b in self.groups] if self.groups else [[b] for b in range(len(self.views))]
                 for tf, names in self.frames:
                     try:
-                        sketches = [kept_sketch(outdir.file(files[0]), view, self.width)
-                                    for files, view in zip(names, self.views)]
+                        polys = {}   # body number -> its centreline (a piece of its kind's file, `groups`)
+                        for files, bodies in zip(names, members):
+                            poly = read_vtp(outdir.file(files[0]))
+                            for j, b in enumerate(bodies):
+                                polys[b] = piece(poly, j) if self.groups else poly
+                        sketches = [kept_sketch(polys[b], view, self.width) for b, view in enumerate(self.views)]
                         if self.marks:
                             sketches.append(marks_sketch(read_vtp(outdir.file(joints[tf])).points))
                         self.snapshots.append((tf, sketches))
@@ -484,13 +489,11 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
     return ResumedWriter()
 
 
-def kept_sketch(path, view, width):
-    """The picture's Sketch of a body (its BodyView) at a frame written before the restart, from the
-    centreline file `path`: its points and section frame d1, d2 (, d3) are those of the state (a planar
-    model's d3 is e_z), the box that of the model: the Sketch of the uninterrupted run."""
+def kept_sketch(poly, view, width):
+    """The picture's Sketch of a body (its BodyView) at a frame written before the restart, from its
+    centreline `poly` (read back): its points and section frame d1, d2 (, d3) are those of the state (a
+    planar model's d3 is e_z), the box that of the model: the Sketch of the uninterrupted run."""
     from rodfem.io.animation import sketch
-    from rodfem.io.vtk import read_vtp
-    poly = read_vtp(path)
     directors = None
     if view.has_frame:
         d = [poly.point_data[f"d{i}"].values for i in (1, 2, 3) if f"d{i}" in poly.point_data]

@@ -6,7 +6,10 @@
                  ("running" from the start, replaced at the end by "completed",
                  "newton-failure", "interrupted" or "error")
 * centreline.pvd, centreline/   each body as one VTK polyline (.vtp, one per frame and body:
-                 the nodes in order, nodal fields, section frame, strains and stress resultants)
+                 the nodes in order, nodal fields, section frame, strains and stress resultants;
+                 a system of more than LEGEND = 12 bodies: one file per frame and model kind,
+                 e.g. frame_00007_RigidBody.vtp, with a point array `body`, the index into its
+                 field data `bodies`: 1000 links write 2 files a frame, not 2000)
 * surface.pvd, surface/         each body's surface: its section swept along the centreline and
                  turned with the directors (rods), a tube (strings), a box (rigid bodies), with the
                  strains and stress resultants cell by cell (rodfem/io/frames.py)
@@ -49,11 +52,11 @@ import numpy as np
 
 from rodfem.errors import InputError, agreed
 from rodfem.fem import compat
-from rodfem.io.animation import box_size, marks_sketch, plot_shapes, sketch, write_animation
+from rodfem.io.animation import LEGEND, box_size, marks_sketch, plot_shapes, sketch, write_animation
 from rodfem.io.frames import centreline, describe, drawn_section, surface
 from rodfem.io.glyphs import glyphs, marks_of
 from rodfem.io.snapshot import blend, body_views
-from rodfem.io.vtk import Array, write_pvd, write_vtp
+from rodfem.io.vtk import Array, merge, write_pvd, write_vtp
 
 OWN_FILES = ("history.csv", "summary.json", "centreline.pvd", "surface.pvd", "fields.json", "shapes.png",
              "energy.png", "animation.gif", "centreline/frame_*.vtp", "surface/frame_*.vtp",
@@ -234,6 +237,7 @@ class RunWriter:
         self.mark_frames = []                   # [(t, file)]
         self.section, self.width = float(section), None
         self.count, self.frames, self.snapshots = 0, [], []
+        self.groups = model_groups(self.views) if len(self.views) > LEGEND else None
         self.dim = max(v.dim for v in self.views)
         self._file = self._csv = None
 
@@ -284,22 +288,37 @@ class RunWriter:
             states = self._gather()
         self.out.do("write a frame", self._write_frame, clean_time(t), states)
 
-    def file_name(self, kind, k, view):
-        """centreline/frame_00007.vtp (one body) or centreline/frame_00007_crank.vtp (a system's body)."""
-        return f"{kind}/frame_{k:05d}{'_' + view.name if len(self.views) > 1 else ''}.vtp"
+    @property
+    def parts(self):
+        """The names of a frame's files: the body's (one body: ""), or its model kind's (`groups`)."""
+        return [name for name, _ in self.groups] if self.groups else [view.name for view in self.views]
+
+    def file_name(self, kind, k, part):
+        """centreline/frame_00007.vtp (one body), centreline/frame_00007_crank.vtp (a system's body) or
+        centreline/frame_00007_RigidBody.vtp (all rigid bodies of a system of more than LEGEND bodies)."""
+        return f"{kind}/frame_{k:05d}{'_' + part if len(self.parts) > 1 or self.groups else ''}.vtp"
+
+    def _polys(self, view, state):
+        """The centreline and surface PolyData of one body's state."""
+        return (centreline(state, view.labels, view.velocity),
+                surface(state, view.labels, self.width, box_size, view.rates, view.velocity,
+                        drawn_section(view.model, self.width, self.section)))
 
     def _write_frame(self, t, states):
         k = len(self.frames)
         if k == 0:
             self._first_frame(states)
         names = []
-        for view, state in zip(self.views, states):
-            files = (self.file_name("centreline", k, view), self.file_name("surface", k, view))
-            polys = (centreline(state, view.labels, view.velocity),
-                     surface(state, view.labels, self.width, box_size, view.rates, view.velocity,
-                             drawn_section(view.model, self.width, self.section)))
-            for name, poly in zip(files, polys):
-                poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, view.units)}
+        members = [b for _, b in self.groups] if self.groups else [[b] for b in range(len(self.views))]
+        for part, bodies in zip(self.parts, members):
+            files = (self.file_name("centreline", k, part), self.file_name("surface", k, part))
+            pairs = [self._polys(self.views[b], states[b]) for b in bodies]
+            for i, name in enumerate(files):
+                poly = merge([pair[i] for pair in pairs]) if self.groups else pairs[0][i]
+                units = dict(self.views[bodies[0]].units, body="1")
+                poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, units)}
+                if self.groups:   # point array body: the index into this list
+                    poly.field_data["bodies"] = [self.views[b].name for b in bodies]
                 replace_atomically(self.out.file(name), lambda tmp, p=poly: write_vtp(tmp, p))
             names.append(files)
         self.frames.append((t, names))
@@ -316,8 +335,7 @@ class RunWriter:
             sketches.append(marks_sketch(poly.points))
         self.snapshots.append((t, sketches))
         for i, kind in enumerate(("centreline", "surface")):
-            series = [(tf, b, files[b][i], view.name) for tf, files in self.frames
-                      for b, view in enumerate(self.views)]
+            series = [(tf, b, files[b][i], part) for tf, files in self.frames for b, part in enumerate(self.parts)]
             replace_atomically(self.out.file(kind + ".pvd"), lambda tmp, d=series: write_pvd(tmp, d))
 
     def _first_frame(self, states):
@@ -379,8 +397,23 @@ class RunWriter:
         if framed:
             from rodfem.io.paraview import run_facts, write_script
             units = {k: u for v in self.views for k, u in v.units.items()}
-            facts = run_facts(self.out.path, "blocks" if len(self.views) > 1 else None)
+            facts = run_facts(self.out.path, "body" if self.groups else "blocks" if len(self.views) > 1 else None)
             replace_atomically(self.out.file("view.py"), lambda tmp: write_script(tmp, facts, units))
+
+
+def model_groups(views):
+    """[(name, [body numbers])]: the bodies by model kind (class and fields: the same arrays in their files), in
+    the order met; a name is the class's (RigidBody), numbered from the second kind of one class on (String_2)."""
+    keys, groups = {}, []
+    for b, view in enumerate(views):
+        model = view.model
+        key = (type(model).__name__, tuple(f.name for f in model.fields), bool(getattr(model, "massless", False)))
+        if key not in keys:
+            same = sum(k[0] == key[0] for k in keys)
+            keys[key] = len(groups)
+            groups.append((key[0] + (f"_{same + 1}" if same else ""), []))
+        groups[keys[key]][1].append(b)
+    return groups
 
 
 def summarize(scene_name, params, problem, result, status="completed", failure=None):

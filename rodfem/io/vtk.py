@@ -84,6 +84,37 @@ def _cells(tag, cells):
             + f"      </{tag}>\n".encode())
 
 
+def merge(polys, index="body"):
+    """One PolyData of several with the same arrays: their points and cells one after the other (cell data
+    kept in VTK's order: all vertices, then all lines, then all polygons) and a point array `index`, the
+    number of the PolyData each point came from (`piece` takes one back out)."""
+    starts = np.cumsum([0] + [len(p.points) for p in polys])
+    out = PolyData(points=np.concatenate([np.asarray(p.points, dtype=np.float64).reshape(-1, 3) for p in polys]),
+                   active=polys[0].active)
+    kinds = ("verts", "lines", "polys")
+    for kind in kinds:
+        setattr(out, kind, [c + start for p, start in zip(polys, starts) for c in getattr(p, kind)])
+    out.point_data = {name: Array(np.concatenate([p.point_data[name].values for p in polys]), a.components)
+                      for name, a in polys[0].point_data.items()}
+    for name, a in polys[0].cell_data.items():
+        parts = {kind: [] for kind in kinds}
+        for p in polys:
+            bounds = np.cumsum([0] + [len(getattr(p, kind)) for kind in kinds])
+            for j, kind in enumerate(kinds):
+                parts[kind].append(p.cell_data[name].values[bounds[j]:bounds[j + 1]])
+        out.cell_data[name] = Array(np.concatenate([v for kind in kinds for v in parts[kind]]), a.components)
+    out.point_data[index] = Array(np.repeat(np.arange(len(polys), dtype=np.int32), np.diff(starts)))
+    return out
+
+
+def piece(poly, k, index="body"):
+    """The points and point data of the k-th PolyData of a `merge` (no cells)."""
+    mine = np.asarray(poly.point_data[index].values) == k
+    return PolyData(points=np.asarray(poly.points)[mine],
+                    point_data={name: Array(np.asarray(a.values)[mine], a.components)
+                                for name, a in poly.point_data.items() if name != index})
+
+
 def write_vtp(path, poly):
     """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
     parts = [b'<?xml version="1.0" encoding="utf-8"?>\n'

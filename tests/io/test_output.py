@@ -380,9 +380,11 @@ for bad in (0, 1):
         out.do_each(tasks)
     except InputError as e:
         errors.append(str(e))
-print(json.dumps({{"ran": comm.allgather(ran), "errors": comm.allgather(errors)}}))
+rows = {{"ran": comm.allgather(ran), "errors": comm.allgather(errors)}}
+if comm.rank == 0:
+    print(json.dumps(rows))
 """
-    serial, parallel = script_on_ranks(script, timeout=120)
+    serial, parallel = script_on_ranks(script, timeout=300)
     assert serial["ran"] == [["a", "b"]]
     assert parallel["ran"] == [["a"], ["b"]]
     for row in (serial, parallel):
@@ -390,3 +392,41 @@ print(json.dumps({{"ran": comm.allgather(ran), "errors": comm.allgather(errors)}
             assert len(errors) == 2
             assert "cannot write the plots (No space left on device)" in errors[0]
             assert "cannot write view.py (No space left on device)" in errors[1]
+
+
+def test_many_bodies_share_one_file_per_model_kind_and_frame(tmp_path, monkeypatch):
+    """More bodies than a legend shows (the 16-link chain): one centreline and one surface file per frame
+    holds every rigid link (field data `bodies`, point array `body`: the index into it); each body's piece
+    of it equals, array by array and cell by cell, the file of its own that a run written body by body
+    gives (the same run with LEGEND raised); the .pvd lists one part per frame."""
+    from rodfem.app.cli import main
+    from rodfem.io import output
+    from rodfem.io.vtk import piece, read_pvd
+    args = ["run", "chain-1000", "--set", "t_end=0.05", "--set", "frames=3", "--quiet", "--out"]
+    assert main(args + [str(tmp_path / "kinds")]) == 0
+    monkeypatch.setattr(output, "LEGEND", 100)
+    assert main(args + [str(tmp_path / "bodies")]) == 0
+    names = [f"link{i}" for i in range(16)]
+    for kind in ("centreline", "surface"):
+        assert sorted(os.listdir(tmp_path / "kinds" / kind)) == [f"frame_{k:05d}_RigidBody.vtp" for k in range(3)]
+        assert [(p, n) for _, p, _, n in read_pvd(tmp_path / "kinds" / f"{kind}.pvd")] == [(0, "RigidBody")] * 3
+        assert len(os.listdir(tmp_path / "bodies" / kind)) == 3 * 16
+        for k in range(3):
+            merged = read_vtp(tmp_path / "kinds" / kind / f"frame_{k:05d}_RigidBody.vtp")
+            assert merged.field_data["bodies"] == names
+            assert merged.field_data["TimeValue"].values[0] == [0.0, 0.025, 0.05][k]
+            own = [read_vtp(tmp_path / "bodies" / kind / f"frame_{k:05d}_{name}.vtp") for name in names]
+            start = 0
+            for j, body in enumerate(own):
+                part = piece(merged, j)
+                assert np.array_equal(part.points, body.points)
+                assert set(part.point_data) == set(body.point_data)
+                for a in body.point_data:
+                    assert np.array_equal(part.point_data[a].values, body.point_data[a].values), (kind, a)
+                for cells in ("verts", "lines", "polys"):   # the same cells, moved by the points before
+                    mine = [c for c in getattr(merged, cells)
+                            if start <= c.min() < start + len(body.points)]
+                    assert [list(c - start) for c in mine] == [list(c) for c in getattr(body, cells)]
+                start += len(body.points)
+            for a, values in merged.cell_data.items():
+                assert np.array_equal(values.values, np.concatenate([b.cell_data[a].values for b in own]))
