@@ -430,3 +430,25 @@ def test_many_bodies_share_one_file_per_model_kind_and_frame(tmp_path, monkeypat
                 start += len(body.points)
             for a, values in merged.cell_data.items():
                 assert np.array_equal(values.values, np.concatenate([b.cell_data[a].values for b in own]))
+
+
+def test_many_bodies_are_drawn_as_one_artist_per_kind_and_colour():
+    """joined: up to LEGEND bodies each keeps its sketch; above, the bodies of one kind and colour become
+    one sketch: the links' edges all kept, rods' centrelines and section directions one after the other
+    with a NaN row between two bodies (a break in the drawn line, no segment joining them)."""
+    from rodfem.io.animation import LEGEND, Sketch, joined
+    rng = np.random.default_rng(1)
+    links = [Sketch("link", rng.random((1, 3)), edges=rng.random((1, 2, 3))) for _ in range(LEGEND)]
+    rods = [Sketch("rod", rng.random((5, 3)), d2=rng.random((5, 3))) for _ in range(4)]
+    colours = ["a", "b"] * (LEGEND // 2) + ["a", "a", "b", "b"]
+    marks = Sketch("marks", rng.random((3, 3)))
+    same, _ = joined(links + [marks], colours[:LEGEND] + ["k"])
+    assert same == links + [marks]
+    out, cols = joined(links + rods + [marks], colours + ["k"])
+    assert [(sk.kind, c) for sk, c in zip(out, cols)] == [("link", "a"), ("link", "b"), ("rod", "a"), ("rod", "b"),
+                                                          ("marks", "k")]
+    assert np.array_equal(out[0].edges, np.concatenate([sk.edges for sk in links[0::2]]))
+    assert np.array_equal(out[1].line, np.concatenate([sk.line for sk in links[1::2]]))
+    rod_a = out[2]
+    assert rod_a.line.shape == (11, 3) and np.all(np.isnan(rod_a.line[5])) and np.all(np.isnan(rod_a.d2[5]))
+    assert np.array_equal(rod_a.line[6:], rods[1].line) and np.array_equal(rod_a.d2[:5], rods[0].d2)
