@@ -472,11 +472,10 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
                                         for ds in ET.parse(marks).getroot().iter("DataSet")
                                         if float(ds.get("timestep")) <= t * (1 + 1e-12) + 1e-300]
                 joints = dict(self.mark_frames)
-                members = [b for _, b in self.groups] if self.groups else [[b] for b in range(len(self.views))]
                 for tf, names in self.frames:
                     try:
                         polys = {}   # body number -> its centreline (a piece of its kind's file, `groups`)
-                        for files, bodies in zip(names, members):
+                        for files, bodies in zip(names, self.members):
                             poly = read_vtp(outdir.file(files[0]))
                             for j, b in enumerate(bodies):
                                 polys[b] = piece(poly, j) if self.groups else poly

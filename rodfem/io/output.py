@@ -293,6 +293,11 @@ class RunWriter:
         """The names of a frame's files: the body's (one body: ""), or its model kind's (`groups`)."""
         return [name for name, _ in self.groups] if self.groups else [view.name for view in self.views]
 
+    @property
+    def members(self):
+        """The body numbers in each of `parts`' files."""
+        return [b for _, b in self.groups] if self.groups else [[b] for b in range(len(self.views))]
+
     def file_name(self, kind, k, part):
         """centreline/frame_00007.vtp (one body), centreline/frame_00007_crank.vtp (a system's body) or
         centreline/frame_00007_RigidBody.vtp (all rigid bodies of a system of more than LEGEND bodies)."""
@@ -309,8 +314,7 @@ class RunWriter:
         if k == 0:
             self._first_frame(states)
         names = []
-        members = [b for _, b in self.groups] if self.groups else [[b] for b in range(len(self.views))]
-        for part, bodies in zip(self.parts, members):
+        for part, bodies in zip(self.parts, self.members):
             files = (self.file_name("centreline", k, part), self.file_name("surface", k, part))
             pairs = [self._polys(self.views[b], states[b]) for b in bodies]
             for i, name in enumerate(files):
