@@ -9,6 +9,11 @@ handful of numpy contractions (no Python work per joint):
     momentum rows:      r_v = G^T lambda               d/dq_{n+1}: 1/2 lambda.Q,  d/dlambda: G^T
     constraint rows:    r_lam = G v_m - dg_p/h         d/dq_{n+1}: 1/2 Q v_m,     d/dv_{n+1}: 1/2 G
 
+A joint whose conditions are linear in q (Q_k = 0: a pin between two beams' end nodes) has a constant
+G_k = c_k and constant Jacobian blocks: they are computed once, and a step of such joints is the two
+products above.  The blocks of the others are computed when a Jacobian is asked for, not at every
+residual.
+
 Their global rows and columns are fixed when the system is built, so the Jacobian's entries of
 all joints go into the matrix by one MatSetValues call per row in one petsc4py call
 (``setValuesIJV``, the entries sorted by row once), the residual's by one ``setValues``.
@@ -82,6 +87,9 @@ class _Group:
                        (self.lam_index, self.v_index, every, free_v),      # d r_lam / d v
                        (self.lam_index, self.lam_index, every, every)]     # zeros (the LU's pivots)
         self.free_v, self.m = free_v, m
+        # linear conditions (Q = 0): G = c and the blocks are constant
+        self.linear, self._constant = self.QG.nnz == 0, None
+        self._constant = self.blocks(self.c, np.zeros((k, m)), np.zeros((k, n))) if self.linear else None
 
     def entries(self):
         """(rows, cols, kept mask) of every block's entries that can be nonzero, flattened (in the
@@ -106,24 +114,33 @@ class _Group:
         return (self.QG @ q.ravel()).reshape(self.c.shape) + self.c
 
     def step(self, v0, v1, h, t0, t1):
-        """The terms of the step: (r_v [k, n], r_lam [k, m], blocks (each block's values at its
-        entries, flat), work)."""
-        q0, q1 = v0[self.q_at], v1[self.q_at]
-        qm, vm = 0.5 * (q0 + q1), 0.5 * (v0[self.v_at] + v1[self.v_at])
+        """The terms of the step: (r_v [k, n], r_lam [k, m], (G, lambda, v_m): what `blocks` takes, work)."""
+        vm = 0.5 * (v0[self.v_at] + v1[self.v_at])
         lam = v1[self.lam_at]
-        G = self.G(qm)
-        dgp = self.prescribed(t1) - self.prescribed(t0) if self.driven else np.zeros(self.e.shape)
+        if self.linear:
+            G = self.c
+        else:
+            q0, q1 = v0[self.q_at], v1[self.q_at]
+            G = self.G(0.5 * (q0 + q1))
+        dgp = self.prescribed(t1) - self.prescribed(t0) if self.driven else 0.0
         r_v = np.matmul(lam[:, None, :], G)[:, 0, :]
         r_lam = np.matmul(G, vm[:, :, None])[:, :, 0] - dgp / h
-        blocks = [self.QL @ lam.ravel(), G.transpose(0, 2, 1).ravel()[self.structure[1]],
-                  0.5 * (self.QG @ vm.ravel())[self.structure[2]], 0.5 * G.ravel()[self.structure[3]], self.zeros]
         work = -float(np.sum((lam * dgp)[self.counted])) if self.driven else 0.0
-        return r_v, r_lam, blocks, work
+        return r_v, r_lam, (G, lam, vm), work
+
+    def blocks(self, G, lam, vm):
+        """Each Jacobian block's values at its entries (flat, in the order of `entries`): 1/2 lambda.Q,
+        G^T, 1/2 Q v_m, 1/2 G and the zeros (constant for linear conditions)."""
+        if self._constant is not None:
+            return self._constant
+        return [self.QL @ lam.ravel(), G.transpose(0, 2, 1).ravel()[self.structure[1]],
+                0.5 * (self.QG @ vm.ravel())[self.structure[2]], 0.5 * G.ravel()[self.structure[3]], self.zeros]
 
     def position_residual(self, v, t):
         """g(q) - g_p(t) = 1/2 (G(q) + c) q + e - g_p(t) of every joint [k, m]."""
         q = v[self.q_at]
-        return 0.5 * np.matmul(self.G(q) + self.c, q[:, :, None])[:, :, 0] + self.e - self.prescribed(t)
+        G = self.c if self.linear else self.G(q)
+        return 0.5 * np.matmul(G + self.c, q[:, :, None])[:, :, 0] + self.e - self.prescribed(t)
 
 
 class JointBatch:
@@ -170,6 +187,7 @@ class JointBatch:
             [np.concatenate([g.v_index.ravel()[kv], g.lam_index.ravel()[kl]]) for g, (kv, kl) in
              zip(self.groups, self._res_keep)]).astype(PETSc.IntType) if self.groups else np.zeros(0, PETSc.IntType)
         self._terms = None
+        self._values = None   # the Jacobian's values, when constant (linear conditions only)
 
     def entries(self):
         """(rows, cols) of every matrix entry the joints can fill."""
@@ -193,9 +211,14 @@ class JointBatch:
     def jacobian(self, A):
         if not self._terms or not len(self.rows):
             return
-        values = np.concatenate([block.ravel() for terms in self._terms for block in terms[2]])[self._gather]
-        A.setValuesIJV(self._indptr, self._cols, np.ascontiguousarray(values, dtype=PETSc.ScalarType),
-                       addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rowmap)
+        values = self._values
+        if values is None:
+            values = np.concatenate([block.ravel() for g, terms in zip(self.groups, self._terms)
+                                     for block in g.blocks(*terms[2])])[self._gather]
+            values = np.ascontiguousarray(values, dtype=PETSc.ScalarType)
+            if all(g.linear for g in self.groups):
+                self._values = values   # (constant)
+        A.setValuesIJV(self._indptr, self._cols, values, addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rowmap)
 
     def worst_gap(self, v, t):
         """max |g(q) - g_p(t)| over the joints."""

@@ -991,7 +991,7 @@ class PointIndex:
                 x = model.frame(pc.unpack(vals[self.marker_at[name]]), pc.point.offset).x
                 for c, value in zip("xyz", x):
                     obs[f"{name}_{c}"] = float(value)
-        return self.comm.bcast(obs, root=0)
+        return self.comm.bcast(obs, root=0) if self.comm.size > 1 else obs
 
 
 def coupled(columns):
