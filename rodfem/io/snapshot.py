@@ -114,7 +114,7 @@ class BodyView:
             ncells = body.mesh.topology.index_map(body.mesh.topology.dim).size_local
             cells = compat.eval_expression(expr, body.mesh, np.arange(ncells, dtype=np.int32))
             cells = cells.reshape(ncells, 2 * self.degree + 1, -1)
-        gathered = body.comm.gather((local, cells), root=0)
+        gathered = body.comm.gather((local, cells), root=0) if body.comm.size > 1 else [(local, cells)]
         if body.comm.rank != 0:
             return None
         pos_name = self.model.position

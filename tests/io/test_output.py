@@ -452,3 +452,21 @@ def test_many_bodies_are_drawn_as_one_artist_per_kind_and_colour():
     rod_a = out[2]
     assert rod_a.line.shape == (11, 3) and np.all(np.isnan(rod_a.line[5])) and np.all(np.isnan(rod_a.d2[5]))
     assert np.array_equal(rod_a.line[6:], rods[1].line) and np.array_equal(rod_a.d2[:5], rods[0].d2)
+
+
+def test_segments_are_drawn_as_one_broken_line():
+    """broken: n segments (two points each) become one polyline of 3n rows, each segment's points and then
+    a NaN row (where matplotlib lifts the pen); drawn, the line's data are those rows in 2D and 3D."""
+    from rodfem.io.animation import Canvas, Layout, Sketch, broken
+    rng = np.random.default_rng(2)
+    segments = rng.random((4, 2, 3))
+    line = broken(segments)
+    assert line.shape == (12, 3) and np.all(np.isnan(line[2::3]))
+    assert np.array_equal(line[0::3], segments[:, 0]) and np.array_equal(line[1::3], segments[:, 1])
+    for dim in (2, 3):
+        sk = Sketch("link", rng.random((1, 3)), edges=segments if dim == 3 else segments * [1, 1, 0])
+        canvas = Canvas(Layout([(0.0, [sk])], dim, 0.1), "")
+        art = canvas.draw([sk], ["tab:blue"])[0][0]
+        data = np.column_stack(art.get_data_3d() if dim == 3 else art.get_data())
+        assert np.array_equal(data, broken(sk.edges[:, :, list(canvas.axes)]), equal_nan=True)
+        canvas.close()
