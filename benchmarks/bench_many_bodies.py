@@ -156,7 +156,8 @@ def main():
     ap.add_argument("--small", action="store_true", help="only the small scenes, this checkout and --before in turn, "
                     "--repeats processes each: medians (the small-step tables)")
     ap.add_argument("--repeats", type=int, default=5, help="--small: processes per case and checkout")
-    ap.add_argument("--before-name", help="--small, --rigid: what --before is, for the table's note (default: its path)")
+    ap.add_argument("--before-name", help="what --before is, for the table's note (default: its path; the main run: "
+                    "'main before this work')")
     ap.add_argument("--rigid", action="store_true", help="only the chain-1000 scene (rigid links on revolute joints): "
                     "build time and ms/step at 16 to 1000 links")
     args = ap.parse_args()
@@ -170,7 +171,7 @@ def main():
         with open(os.path.join(HERE, "many_bodies.csv")) as fh:
             rows = list(csv.DictReader(fh))
         codes = [c for c in ("batch", "body by body", "before") if f"{c}:ms_per_step" in rows[0]]
-        return report(rows, codes, write_report, None)
+        return report(rows, codes, write_report, None, args.before_name)
     cases = [("chain", N, None, 20) for N in (1, 4, 16, 64, 256)]
     if not args.quick:
         cases.append(("chain", 1000, None, 5))
@@ -193,7 +194,7 @@ def main():
                 row[f"{label}:{k}"] = v
             print(row["case"], label, r, flush=True)
         rows.append(row)
-    report(rows, [label for label, _, _ in codes], write_report, os.getloadavg()[0])
+    report(rows, [label for label, _, _ in codes], write_report, os.getloadavg()[0], args.before_name)
 
 
 SMALL = [("scene", "flying-spaghetti-2d", 10, 300), ("scene", "flying-spaghetti-3d", 10, 200),
@@ -278,7 +279,7 @@ def _replace_section(path, lines, heading, markers=(SMALL_START, SMALL_END)):
         fh.write("\n".join(text[:a] + lines + text[b:]))
 
 
-def report(rows, codes, write_report, load):
+def report(rows, codes, write_report, load, before_name=None):
     """benchmarks/many_bodies.{csv,md}: every case side by side, then the two focused tables."""
     def cell(key, fmt):
         return lambda r: fmt.format(float(r[key])) if r.get(key) not in (None, "") else ""
@@ -300,7 +301,7 @@ def report(rows, codes, write_report, load):
                         "h = 1 ms; scenes at their default h.  ms/step: CPU time of the process per step, the better "
                         "of two runs; build: CPU seconds of a build after the first of a process (JIT cache warm). "
                         "Serial, one thread.  batch: this checkout; body by body: this checkout with System(batch=False); "
-                        "before: the checkout given as --before (main before this work)."],
+                        f"before: the checkout given as --before ({before_name or 'main before this work'})."],
                  notes=[load_note, "", *focused(rows, sections.pop("small", None))])
     if sections:   # (the ranks and rigid-links sections, after the rest)
         with open(path, "a") as fh:
