@@ -39,6 +39,46 @@ def lu_name(settings):
     return solver
 
 
+# PETSc's LU in RCM order is the serial default (the chains, rods and beams of most scenes: a band).  A
+# structure that is no band (a net of strings joined at its crossings: a 2D graph) fills RCM's whole
+# envelope; there the partial LU comes first, whose AMD order keeps each multiplier after the dofs it
+# constrains (PETSc's LU in AMD order met a zero pivot there).  A 20 x 20 cable net, 20,400 unknowns:
+# 3.0e6 entries of the factor in RCM order, 4.3e5 in the partial LU's; ms per step 46.8 -> 14.3.
+# `first_lu` decides at the first Jacobian of a system of at least ORDER_TRIAL unknowns by the entries of
+# RCM's envelope per entry of the matrix: the beam chains and the hanging cable 0.47 (PETSc's LU kept);
+# cable nets of 6 x 6 (2,004 unknowns), 10 x 10 and 14 x 14 crossings 2.1, 3.4 and 4.6, where the partial
+# LU's steps took 1.88, 5.63 and 7.10 ms against 2.20, 12.75 and 21.64 (20 steps of each, serial).
+ORDER_TRIAL, WIDE = 2000, 2.0
+
+
+def rcm_envelope(A):
+    """The number of entries, per entry of the sequential AIJ matrix A, in the lower envelope of A in RCM
+    order (sum over the rows of the distance from the row's first entry to the diagonal): about RCM's fill."""
+    import numpy as np
+
+    from rodfem.fem import petsc_raw
+    ki, kj = petsc_raw.rowij(petsc_raw.blocks(A)[0])
+    rows, _ = A.getOrdering("rcm")
+    perm = np.asarray(rows.getIndices())
+    rows.destroy()
+    n = len(ki) - 1
+    position = np.empty(n, np.int64)
+    position[perm] = np.arange(n)
+    filled = np.diff(ki) > 0
+    first = np.full(n, n, np.int64)
+    first[filled] = np.minimum.reduceat(position[kj], ki[:-1][filled])
+    return float(np.sum(np.maximum(position - np.minimum(first, position), 0))) / max(len(kj), 1)
+
+
+def first_lu(A):
+    """The LU to start with on A (sequential AIJ, its first Jacobian): "schur" (the partial LU) when A has at
+    least ORDER_TRIAL rows and RCM's envelope more than WIDE entries per entry of A, else "petsc"."""
+    from rodfem.fem import petsc_raw
+    if A.getSize()[0] < ORDER_TRIAL or not petsc_raw.usable():
+        return "petsc"
+    return "schur" if rcm_envelope(A) > WIDE else "petsc"
+
+
 def next_lu(A, failed):
     """The LU to use after `failed` met a zero pivot on A (sequential AIJ or the local block of a
     rank), or None when there is none left."""

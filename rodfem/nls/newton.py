@@ -3,7 +3,8 @@
 Jacobian J = dF/dx_{n+1} from ufl.derivative; forms are compiled once and
 reused every step; a single body's Jacobian is assembled by rodfem/fem/fastassembly.py
 (DOLFINx's matrix, without its per-entry search).  Direct solves: in serial PETSc's
-own LU in RCM order (3x faster than MUMPS on these banded systems); in parallel
+own LU in RCM order (3x faster than MUMPS on these banded systems; a structure that is no
+band, a net of strings, the partial LU below: rodfem/la/lu_chain.py's first_lu); in parallel
 the exact Schur complement over the rank interfaces of rodfem/la/schur.py
 (MUMPS, the former parallel default, was 4-10x slower than serial and ran out of
 workspace at 10^4 elements).  PETSc's LU does not pivot, so a zero pivot (saddle
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 from petsc4py import PETSc
 
 from rodfem.errors import NewtonFailure, petsc_error
-from rodfem.la.lu_chain import LU_CHAIN, PIVOTING, backward_error, lu_name, mumps_options, next_lu
+from rodfem.la.lu_chain import LU_CHAIN, PIVOTING, backward_error, first_lu, lu_name, mumps_options, next_lu
 
 # Converged when |F| <= 1e-10, |F| <= 1e-12 |F_0|, or the Newton update is at
 # round-off, |dx| <= 1e-14 |x| (stiff problems: the residual carries round-off
@@ -134,7 +135,7 @@ class Newton:
             self.settings["snes_linesearch_type"] = "basic"
         self.prefix = prefix
         self.timings = {"F": 0.0, "J": 0.0}   # seconds spent assembling residuals and Jacobians
-        self._look_for_zero_pivots = comm.size == 1 and lu_name(self.settings) == "petsc"
+        self._first_serial_lu = comm.size == 1 and lu_name(self.settings) == "petsc"
         self._pattern = None   # (its digest, when the first Jacobian has a zero on its diagonal)
         self.snes = None
         self.restart()
@@ -166,8 +167,12 @@ class Newton:
     def _jacobian(self, snes, xin, A, P):
         t0 = time.perf_counter()
         self.assembler.jacobian(xin, A)
-        if self._look_for_zero_pivots:
-            self._skip_doomed_lu(A)
+        if self._first_serial_lu:
+            self._first_serial_lu = False
+            if self._running_lu() == "petsc" and first_lu(A) == "schur":   # (a net: no band)
+                self.use_lu("schur")
+            else:
+                self._skip_doomed_lu(A)
         self.timings["J"] += time.perf_counter() - t0
 
     def _skip_doomed_lu(self, A):
@@ -178,9 +183,7 @@ class Newton:
         four-bar's joint multipliers get their pivots from the fill.)  A failed factorization costs
         the first step a factorization and a repeated Newton solve (issue 26: 1.4 of the 6.6 ms of
         the 16-element 3D rod's first step)."""
-        self._look_for_zero_pivots = False
-        pc = self.snes.getKSP().getPC()   # (what runs: the user's -rodfem_pc_* options may have chosen another)
-        if pc.getType() != "lu" or pc.getFactorSolverType() != "petsc":
+        if self._running_lu() != "petsc":
             return
         from rodfem.fem import petsc_raw
         diagonal = A.getDiagonal()
@@ -194,6 +197,16 @@ class Newton:
         following = _ZERO_PIVOTS.get(self._pattern)
         if following is not None:
             self.use_lu(following)
+
+    def _running_lu(self):
+        """"petsc" when PETSc's LU runs as Newton set it (the user's -rodfem_pc_* options may have chosen
+        another: None)."""
+        opts = PETSc.Options()   # (ours are removed after each configuration: what is left is the user's)
+        if any(opts.hasName(self.prefix + key) for key in ("pc_type", "pc_factor_mat_solver_type",
+                                                           "pc_factor_mat_ordering_type")):
+            return None
+        pc = self.snes.getKSP().getPC()
+        return "petsc" if pc.getType() == "lu" and pc.getFactorSolverType() == "petsc" else None
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
