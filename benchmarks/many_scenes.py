@@ -135,12 +135,23 @@ def report(rows):
                ("newton_its", fmt("newton_its", ".2f"), "Newton its/step"),
                ("balance", fmt("balance", ".1e"), "max balance error / max H"), ("status", "{}")]
     load = os.getloadavg()[0]
+    path = os.path.join(HERE, "many_scenes.md")
+    kept = ""   # (what follows KEPT in the file: comparisons written by hand, kept when the table is written again)
+    if os.path.exists(path):
+        text = open(path).read()
+        kept = text[text.index(KEPT):] if KEPT in text else ""
     write_report("many_scenes", rows, columns, "The many-part scenes at their big sizes: build and step times",
                  intro=["build = scene.build + System.build (JIT cache warm), ms/step = the time loop per step; wall "
                         "and CPU time of rank 0 (the machine is shared: wall times swing by several times, CPU times "
                         "less; on 2 ranks the CPU time includes MPI's busy waiting).  Each case in its own process; "
                         "2 ranks: `mpirun -n 2` on this 2-core machine."],
                  notes=[f"Load average while this ran: {load:.1f} on 2 cores (shared with other developers)."])
+    if kept:
+        with open(path, "a") as fh:
+            fh.write("\n" + kept)
+
+
+KEPT = "<!-- kept: written by hand -->"
 
 
 if __name__ == "__main__":
