@@ -1348,6 +1348,20 @@ MUTATIONS = [
         "candidates = w[~zero & (w.real < -GROWTH * np.abs(w)) & (w.imag >= 0)]")],
       [STABILITY + "::test_self_weight_column_turns_unstable_at_greenhills_length"],
       "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
+    # -- nets: the serial solver's first LU, the partial LU's graph; pictures of many segments (issue 26) --
+    M("partial-lu-multiplier-coupling-dropped", "rodfem/la/partial_lu.py",
+      [("    if held.any():   # the dofs a postponed dof constrains", "    if False:   # the dofs a postponed dof constrains")],
+      ["tests/la/test_scaling.py::test_a_net_starts_with_the_partial_lu_and_keeps_the_history"],
+      "the minimum-degree order blind to the couplings through multipliers: a net's factor 8x fuller"),
+    M("net-kept-in-rcm", "rodfem/la/lu_chain.py",
+      [('    return "schur" if rcm_envelope(A) > WIDE else "petsc"', '    return "petsc"')],
+      ["tests/la/test_scaling.py::test_a_net_starts_with_the_partial_lu_and_keeps_the_history"],
+      "a net factored in RCM order (its whole envelope filled)"),
+    M("segments-joined", "rodfem/io/animation.py",
+      [("    gaps = np.full((len(segments), 1, segments.shape[2]), np.nan)",
+        "    gaps = segments[:, 1:]")],
+      ["tests/io/test_output.py::test_segments_are_drawn_as_one_broken_line"],
+      "separate segments drawn as one line without breaks (the links of a chain joined by strokes)"),
 ]
 
 
