@@ -1350,7 +1350,7 @@ MUTATIONS = [
       "decaying eigenvalues taken for the growing ones: every equilibrium called stable"),
     # -- nets: the serial solver's first LU, the partial LU's graph; pictures of many segments (issue 26) --
     M("partial-lu-multiplier-coupling-dropped", "rodfem/la/partial_lu.py",
-      [("    if held.any():   # the dofs a postponed dof constrains", "    if False:   # the dofs a postponed dof constrains")],
+      [("            g = coupled\n", "            pass\n")],
       ["tests/la/test_scaling.py::test_a_net_starts_with_the_partial_lu_and_keeps_the_history"],
       "the minimum-degree order blind to the couplings through multipliers: a net's factor 8x fuller"),
     M("net-kept-in-rcm", "rodfem/la/lu_chain.py",
