@@ -89,7 +89,8 @@ class _Group:
         self.free_v, self.m = free_v, m
         # linear conditions (Q = 0): G = c and the blocks are constant
         self.linear, self._constant = self.QG.nnz == 0, None
-        self._constant = self.blocks(self.c, np.zeros((k, m)), np.zeros((k, n))) if self.linear else None
+        if self.linear:
+            self._constant = self.blocks(self.c, np.zeros((k, m)), np.zeros((k, n)))
 
     def entries(self):
         """(rows, cols, kept mask) of every block's entries that can be nonzero, flattened (in the

@@ -169,22 +169,21 @@ class Newton:
         self.assembler.jacobian(xin, A)
         if self._first_serial_lu:
             self._first_serial_lu = False
-            if self._running_lu() == "petsc" and first_lu(A) == "schur":   # (a net: no band)
-                self.use_lu("schur")
-            else:
-                self._skip_doomed_lu(A)
+            if self._petsc_lu_as_set():
+                if first_lu(A) == "schur":   # (a net: no band)
+                    self.use_lu("schur")
+                else:
+                    self._skip_doomed_lu(A)
         self.timings["J"] += time.perf_counter() - t0
 
     def _skip_doomed_lu(self, A):
-        """The first Jacobian, serial, PETSc's LU running, a zero on the diagonal (multipliers): if
+        """The first Jacobian, serial, PETSc's LU running as set, a zero on the diagonal (multipliers): if
         PETSc's LU met a zero pivot on this matrix pattern before in this process (a system built
         again: a parameter study, a scene run again), go straight to the LU Newton went on to then,
         before the PC is set up.  (A zero diagonal alone does not doom PETSc's LU in RCM order: the
         four-bar's joint multipliers get their pivots from the fill.)  A failed factorization costs
         the first step a factorization and a repeated Newton solve (issue 26: 1.4 of the 6.6 ms of
         the 16-element 3D rod's first step)."""
-        if self._running_lu() != "petsc":
-            return
         from rodfem.fem import petsc_raw
         diagonal = A.getDiagonal()
         try:
@@ -198,15 +197,14 @@ class Newton:
         if following is not None:
             self.use_lu(following)
 
-    def _running_lu(self):
-        """"petsc" when PETSc's LU runs as Newton set it (the user's -rodfem_pc_* options may have chosen
-        another: None)."""
+    def _petsc_lu_as_set(self):
+        """Whether PETSc's LU runs as Newton set it (the user's -rodfem_pc_* options may have chosen another)."""
         opts = PETSc.Options()   # (ours are removed after each configuration: what is left is the user's)
         if any(opts.hasName(self.prefix + key) for key in ("pc_type", "pc_factor_mat_solver_type",
                                                            "pc_factor_mat_ordering_type")):
-            return None
+            return False
         pc = self.snes.getKSP().getPC()
-        return "petsc" if pc.getType() == "lu" and pc.getFactorSolverType() == "petsc" else None
+        return pc.getType() == "lu" and pc.getFactorSolverType() == "petsc"
 
     def _configure(self, settings):
         """Apply `settings` through the options database for this SNES only: the user's own
