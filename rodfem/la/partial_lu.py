@@ -179,10 +179,11 @@ void plu_backward(int nI, const int32_t* where, const int64_t* up, const int64_t
 
 
 def interior_orders(ki, kj, nI, nG, tries, postpone=None):
-    """For each (method, reverse) of `tries`: a fill-reducing order of the interior (K's rows 0..nI-1) by
-    PETSc (method: rcm, nd, amd; reverse: turned round), the interior dofs that couple to the interface G
-    next, G (rows nI..) last.  The graph is built and each method's order found once (the three tries of
-    a rank's half of 10^5 planar elements took 1.0 s when each built its own).
+    """For each (method, reverse) of `tries`, in turn (a generator: an order not asked for is not made): a
+    fill-reducing order of the interior (K's rows 0..nI-1) by PETSc (method: rcm, nd, amd; reverse: turned
+    round), the interior dofs that couple to the interface G next, G (rows nI..) last.  The graph is built
+    and each method's order found once (the three tries of a rank's half of 10^5 planar elements took
+    1.0 s when each built its own).
 
     `postpone` (bool, interior rows): dofs with a zero diagonal (multipliers of constraints) are
     left out of the fill-reducing order and placed after their partners (below): their pivot is
@@ -240,7 +241,6 @@ def interior_orders(ki, kj, nI, nG, tries, postpone=None):
         return found[method]
 
     pairs = None
-    orders = []
     for method, reverse in tries:
         order = order_of(method)
         if reverse:
@@ -267,14 +267,15 @@ def interior_orders(ki, kj, nI, nG, tries, postpone=None):
                 position[now] = last[now] + 0.5 ** k
                 placed |= now
             order = np.argsort(position, kind="stable")
-        orders.append(np.concatenate([order, np.arange(nI, n)]).astype(np.int32))
-    return orders
+        yield np.concatenate([order, np.arange(nI, n)]).astype(np.int32)
 
 
 # The orders and factor patterns of the last KEEP matrix patterns factored in this process, by
 # pattern: a system built again (a parameter study, a scene run again) or a second Newton on the
 # same matrix pattern skips the ordering and symbolic factorization (a 16-element 3D rod: ~10 ms,
 # most of a 10-step run's set-up).  The numeric factor is always made afresh.
+# An order whose factor has at most NO_BETTER times the entries of K (and its diagonal) ends the tries.
+NO_BETTER = 1.02
 SYMBOLIC = ("perm", "iperm", "bidx", "lj", "lp", "uj", "up", "uend", "kcol", "nnz")
 KEEP = 8
 _SYMBOLIC = {}
@@ -320,15 +321,21 @@ class PartialLU:
         # Without an interface (one rank: the serial LU chain) AMD alone: the band orders' tries cost
         # two more symbolic factorizations (a 16-element 3D rod: 46 instead of 15 ms, a third of a
         # 10-step run) for more fill.
-        tries = (("amd", False), ("rcm", False), ("rcm", True)) if method == "rcm" else ((method, False),)
+        tries = (("rcm", False), ("amd", False), ("rcm", True)) if method == "rcm" else ((method, False),)
         if method == "rcm" and nG == 0:
             tries = (("amd", False),)
+        # No order's factor has fewer entries than K (and its diagonal): an order within NO_BETTER of that
+        # ends the tries (a rank's half of 10^5 planar elements: RCM's factor is K's pattern and 36 entries;
+        # AMD's order and count, 0.4 s, and RCM turned round, 0.1-0.2 s, are then not made).
+        least = len(self.kj) + int(np.count_nonzero(self._diagonal_missing()[:nI]))
         for self.perm in interior_orders(self.ki, self.kj, nI, nG, tries, postpone):
             self.iperm = np.empty_like(self.perm)
             self.iperm[self.perm] = np.arange(self.n, dtype=np.int32)
             nnz = self._symbolic_count(limit=best[0] if best else None)   # (given up above the best)
             if nnz is not None and (best is None or nnz < best[0]):
                 best = (nnz, self.perm, self.iperm, self._pattern)
+            if best[0] <= NO_BETTER * least:
+                break
         _, self.perm, self.iperm, self._pattern = best
         # where = positions of K's interior rows in the caller's vectors (default: 0..nI-1)
         where = np.arange(nI) if where is None else np.asarray(where)
@@ -337,6 +344,13 @@ class PartialLU:
         if len(_SYMBOLIC) >= KEEP:
             _SYMBOLIC.pop(next(iter(_SYMBOLIC)))
         _SYMBOLIC[key] = {k: getattr(self, k) for k in SYMBOLIC}
+
+    def _diagonal_missing(self):
+        """Per row of K: whether its diagonal entry is absent from K's pattern (an interior row's factor has it)."""
+        rows = np.repeat(np.arange(self.n, dtype=np.int32), np.diff(self.ki))
+        present = np.zeros(self.n, bool)
+        present[rows[self.kj == rows]] = True
+        return ~present
 
     def _symbolic_count(self, limit=None):
         """The factor's pattern in the order perm (C): its number of entries (kept in self._pattern),

@@ -99,6 +99,55 @@ def test_partial_lu_leaves_the_schur_complement(method):
     assert lu.fill < 2.5   # RCM turned so that the interface side comes last: no fill outside the band
 
 
+def _chain_with_interface(half_band, nI=300, nG=6, seed=1):
+    """K (CSR): a band of half-width `half_band` in scrambled numbering, its last dofs coupled to nG interface dofs."""
+    import scipy.sparse as sp
+    rng = np.random.default_rng(seed)
+    band = range(-half_band, half_band + 1)
+    chain = sp.diags([rng.normal(size=nI - abs(k)) for k in band], band) + 10 * sp.eye(nI)
+    p = rng.permutation(nI)
+    K = sp.lil_matrix((nI + nG, nI + nG))
+    K[:nI, :nI] = sp.csr_matrix(chain)[p][:, p]
+    for g in range(nG):
+        for c in np.argsort(p)[nI - 5:][:3 + g % 3]:
+            K[c, nI + g], K[nI + g, c] = rng.normal(size=2)
+    K = sp.csr_matrix(K)
+    K.sort_indices()
+    return K, nI, nG
+
+
+def test_partial_lu_tries_end_at_the_pattern_of_the_matrix(monkeypatch):
+    """"rcm" tries RCM, AMD and RCM turned round and keeps the least fill; since no order's factor has fewer
+    entries than K and its diagonal, an order within NO_BETTER of that ends the tries.  A tridiagonal
+    chain: RCM's factor is K's pattern and a few entries, one symbolic count.  A band of half-width 4 (its
+    interface side first in RCM's order: 1.9 times K's entries): all three counted, the one kept the least
+    of the three counted independently (RCM turned round, K's pattern and 2 %)."""
+    from rodfem.la import partial_lu
+    from rodfem.la.partial_lu import NO_BETTER, PartialLU, interior_orders
+    counts = []
+    count = PartialLU._symbolic_count
+    monkeypatch.setattr(PartialLU, "_symbolic_count", lambda self, limit=None: counts.append(limit) or count(self, limit))
+    monkeypatch.setattr(partial_lu, "_SYMBOLIC", {})
+    K, nI, nG = _chain_with_interface(1, nI=3000)
+    lu = PartialLU(K.indptr, K.indices, nI, nG, None, K.nnz, 0, "rcm")
+    assert counts == [None] and K.nnz < lu.nnz <= NO_BETTER * K.nnz   # (the interface side: a few entries more)
+    T = lu.factor(K.data.copy(), None, None)
+    Kd = K.toarray()
+    assert np.allclose(T, -Kd[nI:, :nI] @ np.linalg.solve(Kd[:nI, :nI], Kd[:nI, nI:]), rtol=1e-12, atol=1e-12)
+    counts.clear()
+    K, nI, nG = _chain_with_interface(4)
+    lu = PartialLU(K.indptr, K.indices, nI, nG, None, K.nnz, 0, "rcm")
+    assert len(counts) == 3   # (RCM's factor 1.9 times K's: AMD and RCM turned round tried)
+    each = []
+    for perm in interior_orders(K.indptr.astype(np.int32), K.indices.astype(np.int32), nI, nG,
+                                (("rcm", False), ("amd", False), ("rcm", True))):
+        one = PartialLU.__new__(PartialLU)
+        one.mod, one.n, one.nI, one.ki, one.kj = lu.mod, nI + nG, nI, lu.ki, lu.kj
+        one.perm, one.iperm = perm, np.argsort(perm).astype(np.int32)
+        each.append(count(one))
+    assert lu.nnz == min(each) and len(set(each)) > 1
+
+
 @pytest.mark.parametrize("scene, n, lu", [("flying-spaghetti-2d", 200, "petsc"), ("flying-spaghetti-3d", 12, "schur(rcm)")])
 def test_serial_lu_chain(scene, n, lu):
     """The serial LU: PETSc's in RCM order for the beam; for the 3D rod, whose multipliers are zero
