@@ -445,6 +445,7 @@ def writer_for(outdir, problem, n_steps, frames, step, t, section=0.0, times=Non
         def __init__(self):
             super().__init__(outdir, problem, n_steps, frames, section, times)
             self.count = step + 1
+            self.facts = None      # (view.py's facts read back at the end: the frames before the checkpoint with them)
             self.hold(step, t)     # a frame between the checkpoint's level and the next one (collective)
             if problem.comm.rank != 0:
                 return

@@ -55,6 +55,7 @@ from rodfem.fem import compat
 from rodfem.io.animation import LEGEND, box_size, marks_sketch, plot_shapes, sketch, write_animation
 from rodfem.io.frames import centreline, describe, drawn_section, surface
 from rodfem.io.glyphs import glyphs, marks_of
+from rodfem.io.paraview import RunFacts, run_facts, write_script
 from rodfem.io.snapshot import blend, body_views
 from rodfem.io.vtk import Array, merge, write_pvd, write_vtp
 
@@ -240,6 +241,7 @@ class RunWriter:
         self.groups = model_groups(self.views) if len(self.views) > LEGEND else None
         self.dim = max(v.dim for v in self.views)
         self._file = self._csv = None
+        self.facts = RunFacts()   # view.py's ranges and bounds, frame by frame (None: read back at the end)
 
     # -- per step (collective) ----------------------------------------------------
     def record(self, row, problem):
@@ -319,6 +321,9 @@ class RunWriter:
             pairs = [self._polys(self.views[b], states[b]) for b in bodies]
             for i, name in enumerate(files):
                 poly = merge([pair[i] for pair in pairs]) if self.groups else pairs[0][i]
+                if self.facts is not None:
+                    (self.facts.surface(poly) if i else
+                     self.facts.centreline(t, np.asarray(poly.points, dtype=np.float64).reshape(-1, 3)))
                 units = dict(self.views[bodies[0]].units, body="1")
                 poly.field_data = {"TimeValue": Array(np.array([t])), "units": units_list(poly, units)}
                 if self.groups:   # point array body: the index into this list
@@ -375,9 +380,13 @@ class RunWriter:
                 self.out.do(what, fn, *args)
             except InputError as e:
                 errors.append(e)
-        framed = self.out.comm.bcast(bool(self.frames), root=0)   # (rank 0 writes and counts the frames)
-        try:   # the plots on rank 0, view.py (which reads every frame back) beside them on a second rank
-            self.out.do_each([("write the plots", self._plots, result), ("write view.py", self._view_script, framed)])
+        default = "body" if self.groups else "blocks" if len(self.views) > 1 else None
+        # (rank 0 writes the frames and gathers their facts)
+        framed, facts = self.out.comm.bcast((bool(self.frames), self.facts and self.facts.facts(default,
+                                                                                              bool(self.mark_frames))))
+        try:   # the plots on rank 0, view.py beside them on a second rank
+            self.out.do_each([("write the plots", self._plots, result),
+                              ("write view.py", self._view_script, framed, facts, default)])
         except InputError as e:
             errors.append(e)
         if errors:
@@ -396,12 +405,12 @@ class RunWriter:
             write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
 
 
-    def _view_script(self, framed):
-        """view.py: ParaView's view of the run, with the colour ranges and bounds of all its frames."""
+    def _view_script(self, framed, facts, default):
+        """view.py: ParaView's view of the run, with the colour ranges and bounds of all its frames (`facts`, or
+        read back from the frames' files when None)."""
         if framed:
-            from rodfem.io.paraview import run_facts, write_script
             units = {k: u for v in self.views for k, u in v.units.items()}
-            facts = run_facts(self.out.path, "body" if self.groups else "blocks" if len(self.views) > 1 else None)
+            facts = facts or run_facts(self.out.path, default)
             replace_atomically(self.out.file("view.py"), lambda tmp: write_script(tmp, facts, units))
 
 

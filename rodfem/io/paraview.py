@@ -6,7 +6,7 @@
 (`pvpython` instead of `pvbatch` works the same; headless: `xvfb-run -a pvbatch ...`.)  It loads
 surface.pvd (the bodies' surfaces, one block per body) and joints.pvd (the joints and supports as
 spheres), colours by the run's default array (a rod's or string's first strain, its first
-component) with the colour range over ALL frames (`RUN["ranges"]`, computed from the files), or
+component) with the colour range over ALL frames (`RUN["ranges"]`, gathered as the frames are written), or
 per body with one colour each (a system of rigid bodies, or ``--array blocks``), sets the camera to
 the box of the whole motion of the centrelines (a planar motion seen from +z), and plays the frames at their times.
 The run's facts are the `RUN` literal at the top of the script (ranges, bounds, default array).
@@ -85,37 +85,57 @@ if a.screenshot:
 '''
 
 
-def run_facts(out, default=None):
-    """What view.py needs of the run in directory `out`, read back from its files: the colour ranges
-    of every array over all frames (per component), the bounds of the motion, the times, the default
-    array, whether the motion is planar and whether there are joints."""
-    ranges, comps, bounds, times = {}, {}, [np.full(3, np.inf), np.full(3, -np.inf)], []
-    first_cell = None
-    for t, _, f, _ in read_pvd(os.path.join(out, "centreline.pvd")):
-        points = read_vtp(os.path.join(out, f)).points
-        if t not in times:
-            times.append(t)
+class RunFacts:
+    """What view.py needs of a run, gathered frame by frame: the box of the centrelines' motion, the
+    frames' times, every surface array's range per component (and where it lives: POINTS or CELLS), the
+    first cell array met.  The writer adds each frame as it writes it (rodfem/io/output.py); `run_facts`
+    reads them back from the files (a run resumed from a checkpoint: the frames before it)."""
+
+    def __init__(self):
+        self.ranges, self.comps, self.times, self.first_cell = {}, {}, [], None
+        self.bounds = [np.full(3, np.inf), np.full(3, -np.inf)]
+
+    def centreline(self, t, points):
+        """A centreline file of the frame at time t (its points)."""
+        if t not in self.times:
+            self.times.append(t)
         if len(points):
-            bounds = [np.minimum(bounds[0], points.min(axis=0)), np.maximum(bounds[1], points.max(axis=0))]
-    for t, _, f, _ in read_pvd(os.path.join(out, "surface.pvd")):
-        poly = read_vtp(os.path.join(out, f))
+            self.bounds = [np.minimum(self.bounds[0], points.min(axis=0)), np.maximum(self.bounds[1], points.max(axis=0))]
+
+    def surface(self, poly):
+        """A surface file (PolyData): the ranges of its point and cell arrays."""
         for where, data in (("POINTS", poly.point_data), ("CELLS", poly.cell_data)):
             for name, arr in data.items():
-                v = arr.values.reshape(len(arr.values), -1)
+                v = np.asarray(arr.values).reshape(len(arr.values), -1)
                 if not len(v):
                     continue
-                if where == "CELLS" and first_cell is None:
-                    first_cell = name
-                comps[name] = list(arr.components)
-                old = ranges.get(name, [(where, np.inf, -np.inf)] * v.shape[1])
-                ranges[name] = [(where, min(o[1], float(v[:, k].min())), max(o[2], float(v[:, k].max())))
-                                for k, o in enumerate(old)]
-    span = float(np.max(bounds[1] - bounds[0])) if np.all(np.isfinite(bounds[0])) else 1.0
-    planar = bool(np.isfinite(span) and bounds[1][2] - bounds[0][2] <= 1e-9 * max(span, 1e-300) + 1e-300)
-    array = default if default is not None else (first_cell or "blocks")
-    return {"ranges": ranges, "components": comps, "bounds": [bounds[0].tolist(), bounds[1].tolist()],
-            "times": times, "array": array, "component": 0, "planar": planar,
-            "joints": os.path.isfile(os.path.join(out, "joints.pvd"))}
+                if where == "CELLS" and self.first_cell is None:
+                    self.first_cell = name
+                self.comps[name] = list(arr.components)
+                old = self.ranges.get(name, [(where, np.inf, -np.inf)] * v.shape[1])
+                self.ranges[name] = [(where, min(o[1], float(v[:, k].min())), max(o[2], float(v[:, k].max())))
+                                     for k, o in enumerate(old)]
+
+    def facts(self, default=None, joints=False):
+        """The `RUN` literal of view.py: ranges, components, bounds, times, the default array (`default`, else
+        the first cell array, else blocks), whether the motion is planar and whether joints.pvd is there."""
+        bounds = self.bounds
+        span = float(np.max(bounds[1] - bounds[0])) if np.all(np.isfinite(bounds[0])) else 1.0
+        planar = bool(np.isfinite(span) and bounds[1][2] - bounds[0][2] <= 1e-9 * max(span, 1e-300) + 1e-300)
+        array = default if default is not None else (self.first_cell or "blocks")
+        return {"ranges": dict(self.ranges), "components": dict(self.comps),
+                "bounds": [bounds[0].tolist(), bounds[1].tolist()], "times": list(self.times), "array": array,
+                "component": 0, "planar": planar, "joints": bool(joints)}
+
+
+def run_facts(out, default=None):
+    """RunFacts.facts of the run in directory `out`, read back from its files (centreline.pvd, surface.pvd)."""
+    facts = RunFacts()
+    for t, _, f, _ in read_pvd(os.path.join(out, "centreline.pvd")):
+        facts.centreline(t, read_vtp(os.path.join(out, f)).points)
+    for _, _, f, _ in read_pvd(os.path.join(out, "surface.pvd")):
+        facts.surface(read_vtp(os.path.join(out, f)))
+    return facts.facts(default, os.path.isfile(os.path.join(out, "joints.pvd")))
 
 
 def write_script(path, facts, units):

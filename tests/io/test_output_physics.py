@@ -31,7 +31,7 @@ def scene_run(name, out, **overrides):
     problem = scene.build(p, COMM)
     od = OutDir(str(out), COMM)
     with od.claimed({}):
-        writer = RunWriter(od, problem, steps_for(p["dt"], p["t_end"]), p["frames"], p["section"],
+        writer = RunWriter(od, problem, steps_for(p["dt"], p["t_end"]), p["frames"], p.get("section", 0.0),
                            **writer_options(scene, p))
         result = run(problem, p["dt"], p["t_end"], writer=writer)
         writer.finish({}, result)
@@ -372,6 +372,23 @@ def test_view_script_has_the_ranges_of_all_frames(tmp_path):
     assert run_["bounds"] == [points.min(axis=0).tolist(), points.max(axis=0).tolist()]
     assert run_["times"] == [0.0, 0.25, 0.5, 0.75, 1.0] and run_["array"] == "strain_from_N" and run_["planar"]
     assert run_["units"]["strain_from_M"] == "1/m" and not run_["joints"]
+
+
+@pytest.mark.parametrize("name, overrides, default", [("four-bar-2d", {"t_end": 0.02, "frames": 3}, "blocks"),
+                                                     ("chain-1000", {"n_links": 14, "t_end": 0.02, "frames": 3}, "body")])
+def test_view_script_facts_are_those_of_the_files(tmp_path, name, overrides, default):
+    """The writer gathers view.py's facts as it writes the frames; they are those read back from the
+    files (`run_facts`, what a run resumed from a checkpoint does), in a mechanism with joints (one file
+    per body) and in a chain of more than LEGEND links (one file per model kind: default array body)."""
+    import ast
+
+    from rodfem.io.paraview import run_facts
+    scene_run(name, tmp_path, **overrides)
+    line = next(x for x in (tmp_path / "view.py").read_text().splitlines() if x.startswith("RUN = "))
+    run_ = ast.literal_eval(line[len("RUN = "):])
+    units = run_.pop("units")
+    assert run_ == run_facts(str(tmp_path), default)
+    assert run_["joints"] and run_["array"] == default and len(run_["times"]) >= 2 and units
 
 
 def test_slider_crank_links_run_between_their_joints(tmp_path):
