@@ -230,6 +230,42 @@ def test_run_writes_frames_surface_animation(tmp_path):
         assert (tmp_path / name).stat().st_size > 1000
 
 
+def test_a_frame_is_appended_raw_binary_that_tiles_its_appended_data(tmp_path):
+    """The layout of VTK's appended raw encoding, read by hand (not by read_vtp): every Piece array's
+    DataArray has format="appended" and an offset into the bytes after AppendedData's "_"; there a UInt64
+    count of tuples x components x 8 bytes, the little-endian values (the centreline's points those read
+    back), each block right after the one before, the last followed by the closing tags; field data inline."""
+    import xml.etree.ElementTree as ET
+
+    from rodfem.app.cli import main
+    assert main(["run", "flying-spaghetti-2d", "--set", "n_elements=6", "--set", "t_end=0.2", "--set", "frames=2",
+                 "--quiet", "--out", str(tmp_path)]) == 0
+    for kind in ("centreline", "surface"):
+        data = (tmp_path / kind / "frame_00001.vtp").read_bytes()
+        at = data.index(b'<AppendedData encoding="raw">')
+        raw = data[data.index(b"_", at) + 1:]
+        root = ET.fromstring(data[:at] + b"</VTKFile>")
+        piece = root.find("PolyData/Piece")
+        arrays = piece.findall(".//DataArray")
+        assert all(a.get("format") == "binary" for a in root.findall("PolyData/FieldData/DataArray"))
+        assert arrays and all(a.get("format") == "appended" for a in arrays)
+        end = 0
+        for a in arrays:
+            assert int(a.get("offset")) == end
+            count = int(np.frombuffer(raw[end:end + 8], "<u8")[0])
+            parent = next(p for p in piece.iter() if a in list(p))
+            rows = int(piece.get("NumberOfPoints")) if parent.tag in ("PointData", "Points") else None
+            if rows is not None:
+                assert count == rows * int(a.get("NumberOfComponents")) * 8
+            end += 8 + count
+        assert raw[end:] == b"\n  </AppendedData>\n</VTKFile>\n"
+        points = next(a for a in arrays if a in list(piece.find("Points")))
+        start = int(points.get("offset")) + 8
+        n = int(piece.get("NumberOfPoints"))
+        xyz = np.frombuffer(raw[start:start + 24 * n], "<f8").reshape(n, 3)
+        assert np.array_equal(xyz, read_vtp(tmp_path / kind / "frame_00001.vtp").points)
+
+
 # -- serial and two ranks ----------------------------------------------------------------------------------
 
 @pytest.mark.mpi
