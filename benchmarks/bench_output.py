@@ -48,7 +48,9 @@ def measure(name, overrides, frames):
     class Writer(writer_cls):
         pass
     Writer.frame = timed("frames", writer_cls.frame)
-    Writer._plots = timed("pictures", writer_cls._plots)
+    for name in ("_plots", "_pictures", "_energy_and_view"):   # (a checkout before 2026-11-25: _plots)
+        if hasattr(writer_cls, name):
+            setattr(Writer, name, timed("pictures", getattr(writer_cls, name)))
     hold = getattr(writer_cls, "hold", None)
     if hold is not None:    # the state kept for a frame between two levels: part of a frame's cost
         Writer.hold = timed("frames", hold)

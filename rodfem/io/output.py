@@ -384,9 +384,9 @@ class RunWriter:
         # (rank 0 writes the frames and gathers their facts)
         framed, facts = self.out.comm.bcast((bool(self.frames), self.facts and self.facts.facts(default,
                                                                                               bool(self.mark_frames))))
-        try:   # the plots on rank 0, view.py beside them on a second rank
-            self.out.do_each([("write the plots", self._plots, result),
-                              ("write view.py", self._view_script, framed, facts, default)])
+        try:   # the pictures of the frames on rank 0 (it holds them), energy.png and view.py beside them on a second rank
+            self.out.do_each([("write the pictures", self._pictures),
+                              ("write energy.png and view.py", self._energy_and_view, result, framed, facts, default)])
         except InputError as e:
             errors.append(e)
         if errors:
@@ -397,17 +397,17 @@ class RunWriter:
             file, self._file, self._csv = self._file, None, None
             file.close()  # closed even when its last flush fails
 
-    def _plots(self, result):
-        if result is not None and result.rows:
-            plot_energy(self.out.file("energy.png"), result)
+    def _pictures(self):
+        """shapes.png and animation.gif, from the frames' sketches (rank 0)."""
         if self.snapshots:
             plot_shapes(self.out.file("shapes.png"), self.snapshots, self.dim, self.width)
             write_animation(self.out.file("animation.gif"), self.snapshots, self.dim, self.width)
 
-
-    def _view_script(self, framed, facts, default):
-        """view.py: ParaView's view of the run, with the colour ranges and bounds of all its frames (`facts`, or
-        read back from the frames' files when None)."""
+    def _energy_and_view(self, result, framed, facts, default):
+        """energy.png (the history: on every rank) and view.py: ParaView's view of the run, with the colour ranges
+        and bounds of all its frames (`facts`, or read back from the frames' files when None)."""
+        if result is not None and result.rows:
+            plot_energy(self.out.file("energy.png"), result)
         if framed:
             units = {k: u for v in self.views for k, u in v.units.items()}
             facts = facts or run_facts(self.out.path, default)
