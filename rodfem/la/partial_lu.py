@@ -284,12 +284,12 @@ _SYMBOLIC = {}
 def _pattern_key(ki, kj, src, nI, nG, method, where, postpone):
     """A digest of everything the order and the factor's pattern depend on."""
     import hashlib
-    h = hashlib.blake2b(digest_size=20)
+    h = hashlib.sha256()   # (SHA-256: 1.8 GB/s here with the CPU's SHA instructions, BLAKE2b 0.8)
     for a in (ki, kj, src, where, postpone):
         if a is not None:
             a = np.ascontiguousarray(a)
             h.update(str((a.dtype, a.shape)).encode())
-            h.update(a.tobytes())
+            h.update(a)   # (the array's own memory: no copy)
         else:
             h.update(b"-")
     return (int(nI), int(nG), str(method), h.hexdigest())
@@ -386,13 +386,15 @@ class PartialLU:
         self.lj = np.ascontiguousarray(fj[lower])
         self.lp = np.concatenate([[0], np.cumsum(np.bincount(rows[lower], minlength=n))]).astype(np.int64)
         upper = ~lower & (rows < nI)                    # the interior rows' U parts, diagonal first
-        ur, uc = rows[upper], fj[upper]
-        order = np.lexsort((uc, -ur))                   # rows nI-1 ... 0, each by column
-        self.uj = np.ascontiguousarray(uc[order])
+        ur, uc = rows[upper], fj[upper]                 # (by row, each row by column: as fj is)
         counts = np.bincount(ur, minlength=nI)[:nI]
         self.uend = np.zeros(nI, np.int64)
         self.uend[::-1] = np.cumsum(counts[::-1])
         self.up = self.uend - counts
+        # rows nI-1 ... 0, each by column: row r's k-th entry to up[r] + k (no sort)
+        within = np.arange(len(ur), dtype=np.int64) - (np.cumsum(counts) - counts)[ur]
+        self.uj = np.empty_like(uc)
+        self.uj[self.up[ur] + within] = uc
         self.kcol = np.ascontiguousarray(self.iperm[self.kj], dtype=np.int32)
         self.nnz = int(nnz)
         self._workspace()

@@ -371,8 +371,10 @@ class InterfaceSchur:
             rows.append(np.repeat(nI + np.arange(nG), len(self.C)))
             cols.append(np.tile(imap[self.C], nG))
             src.append(nD + nO + np.arange(nG * len(self.C)))
-        rows, cols, src = (np.concatenate(a).astype(np.int64) for a in (rows, cols, src))
-        order = np.lexsort((cols, rows))
+        rows, cols, src = (np.concatenate(a).astype(np.int64, copy=False) for a in (rows, cols, src))
+        # by row (each part is by row already: a stable sort merges them), a row's entries in the order of
+        # the parts (the partial LU takes a row's entries in any order; none is repeated)
+        order = np.argsort(rows, kind="stable")
         ki = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=nI + nG))])
         return dict(ki=ki, kj=cols[order], nI=nI, src=src[order], nD=nD, nO=nO, interior=interior)
 

@@ -79,9 +79,9 @@ def pattern_key(A):
 
     from rodfem.fem import petsc_raw
     i, j = petsc_raw.rowij(petsc_raw.blocks(A)[0])
-    h = hashlib.blake2b(digest_size=20)
-    h.update(i.tobytes())
-    h.update(j.tobytes())
+    h = hashlib.sha256()
+    h.update(i)   # (rowij: contiguous copies)
+    h.update(j)
     return (A.getSize(), h.hexdigest())
 
 
