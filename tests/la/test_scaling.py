@@ -116,6 +116,25 @@ def _chain_with_interface(half_band, nI=300, nG=6, seed=1):
     return K, nI, nG
 
 
+def test_the_interior_graph_is_the_pattern_of_k_plus_its_transpose():
+    """interior_graph (C) against scipy's K + K^T on the interior rows and columns: the same pattern, rows
+    sorted, for unsymmetric patterns whose rows are not sorted, with an interface block left out."""
+    import scipy.sparse as sp
+
+    from rodfem.la.partial_lu import interior_graph
+    rng = np.random.default_rng(3)
+    for seed in range(10):
+        n, nI = 120, 110 - seed
+        K = sp.csr_matrix(sp.random(n, n, density=0.04, random_state=seed) + sp.eye(n))
+        kj = K.indices.copy()
+        for r in range(n):   # (each row's columns in a random order)
+            kj[K.indptr[r]:K.indptr[r + 1]] = rng.permutation(kj[K.indptr[r]:K.indptr[r + 1]])
+        want = (K + K.T).tocsr()[:nI, :nI]
+        want.sort_indices()
+        got = interior_graph(K.indptr, kj, nI)
+        assert np.array_equal(got.indptr, want.indptr) and np.array_equal(got.indices, want.indices)
+
+
 def test_partial_lu_tries_end_at_the_pattern_of_the_matrix(monkeypatch):
     """"rcm" tries RCM, AMD and RCM turned round and keeps the least fill; since no order's factor has fewer
     entries than K and its diagonal, an order within NO_BETTER of that ends the tries.  A tridiagonal
