@@ -1362,6 +1362,28 @@ MUTATIONS = [
         "    gaps = segments[:, 1:]")],
       ["tests/io/test_output.py::test_segments_are_drawn_as_one_broken_line"],
       "separate segments drawn as one line without breaks (the links of a chain joined by strokes)"),
+    # -- the parallel set-up and the output of a large run (issue 26) --------------------------------------
+    M("partial-lu-tries-never-ended", "rodfem/la/partial_lu.py",
+      [("            if best[0] <= NO_BETTER * least:\n                break\n", "")],
+      ["tests/la/test_scaling.py::test_partial_lu_tries_end_at_the_pattern_of_the_matrix"],
+      "every order tried even when the first one's factor is K's own pattern (AMD's order and count for nothing)"),
+    M("partial-lu-tries-end-at-once", "rodfem/la/partial_lu.py",
+      [("            if best[0] <= NO_BETTER * least:", "            if True:")],
+      ["tests/la/test_scaling.py::test_partial_lu_tries_end_at_the_pattern_of_the_matrix"],
+      "the first order kept whatever its fill (RCM the wrong way round: 1.9 times the entries)"),
+    M("interior-graph-without-transpose", "rodfem/la/partial_lu.py",
+      [("    for (int64_t p = t[r]; p < t[r + 1]; ++p) {", "    for (int64_t p = t[r]; p < t[r]; ++p) {")],
+      ["tests/la/test_scaling.py::test_the_interior_graph_is_the_pattern_of_k_plus_its_transpose"],
+      "the orders' graph K alone, not K + K^T (an unsymmetric pattern's couplings missed)"),
+    M("view-facts-first-frame-only", "rodfem/io/output.py",
+      [("                if self.facts is not None:", "                if self.facts is not None and k == 0:")],
+      ["tests/io/test_output_physics.py::test_view_script_has_the_ranges_of_all_frames"],
+      "view.py's colour ranges and bounds those of the first frame only (a run from rest: [0, 0])"),
+    M("appended-offset-of-the-values", "rodfem/io/vtk.py",
+      [('        attrs["offset"] = str(sum(len(b) for b in appended))',
+        '        attrs["offset"] = str(sum(len(b) for b in appended) + 8)')],
+      ["tests/io/test_output.py::test_a_frame_is_appended_raw_binary_that_tiles_its_appended_data"],
+      "an appended array's offset past its byte count (VTK reads the values shifted)"),
 ]
 
 
