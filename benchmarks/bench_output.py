@@ -3,10 +3,12 @@ surface of every body), and the pictures (shapes.png, animation.gif) at the end.
 
     .venv/bin/python benchmarks/bench_output.py                 # writes benchmarks/output.md
     .venv/bin/python benchmarks/bench_output.py --out /tmp/o.md # another commit: PYTHONPATH=<its checkout>
+    .venv/bin/python benchmarks/bench_output.py --large --out /tmp/large.md   # frames of 10^5 elements
 
 Each scene runs with `frames` frames (a frame per level where frames > steps); the wall time of the
 writer's parts is measured by wrapping RunWriter's methods (the same on any commit that has them),
-the time steps' own cost excluded.  Serial, one core.
+the time steps' own cost excluded; "pictures" is everything at the end: shapes.png, animation.gif,
+energy.png and view.py.  Serial, one core.
 """
 import argparse
 import os
@@ -27,6 +29,7 @@ CASES = [  # scene, parameters, frames
     ("slider-crank-3d", dict(t_end=0.5), 51),
     ("viscoelastic-cantilever-3d", dict(t_end=0.05), 51),
 ]
+LARGE = [("flying-spaghetti-2d", dict(n_elements=100_000, t_end=0.5), 6)]   # (--large: a frame of 23 or 17 MB)
 
 
 def measure(name, overrides, frames):
@@ -48,9 +51,9 @@ def measure(name, overrides, frames):
     class Writer(writer_cls):
         pass
     Writer.frame = timed("frames", writer_cls.frame)
-    for name in ("_plots", "_pictures", "_energy_and_view"):   # (a checkout before 2026-11-25: _plots)
-        if hasattr(writer_cls, name):
-            setattr(Writer, name, timed("pictures", getattr(writer_cls, name)))
+    for part in ("_plots", "_view_script", "_pictures", "_energy_and_view"):   # (before 2026-11-25: the first two)
+        if hasattr(writer_cls, part):
+            setattr(Writer, part, timed("pictures", getattr(writer_cls, part)))
     hold = getattr(writer_cls, "hold", None)
     if hold is not None:    # the state kept for a frame between two levels: part of a frame's cost
         Writer.hold = timed("frames", hold)
@@ -73,8 +76,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "output.md"))
     ap.add_argument("--label", default="this commit")
+    ap.add_argument("--large", action="store_true", help="the cases of LARGE instead (10^5 elements)")
     args = ap.parse_args()
-    rows = [measure(*case) for case in CASES]
+    rows = [measure(*case) for case in (LARGE if args.large else CASES)]
     lines = ["| scene | frames | steps | frame (gather + .vtp) ms | pictures ms/frame | .vtp kB/frame |",
              "|---|---|---|---|---|---|"]
     lines += [f"| {r['scene']} | {r['frames']} | {r['steps']} | {r['frame_ms']:.2f} | {r['pictures_ms']:.1f} | "
