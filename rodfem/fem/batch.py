@@ -21,8 +21,10 @@ Function) from its Function at each assembly.  The gather indices are checked at
 the sums are made in DOLFINx's order (integral by integral, cell by cell, body by body), so the
 batch's residual, Jacobian and functionals are DOLFINx's, bit for bit.
 
-Serial only (a body's dofs are then all owned, X holds them all); cell and exterior-facet
-integrals without dof transformations (`FastJacobian.usable`).
+Serial (a body's dofs are then all owned, X holds them all); a body spread over ranks has its
+residual made by a FormBatch of its own, on its rank's cells with X the Function's local array (owned
+dofs and ghosts), the ghosts' sums then sent to their owners (rodfem/fem/assembly.py's BodyBlock).  Cell
+and exterior-facet integrals without dof transformations (`FastJacobian.usable`).
 """
 import numpy as np
 
@@ -80,10 +82,18 @@ class Segments:
         self.mod.lib.rodfem_get(*self._args(X, "double[]"))
 
 
-def batchable(form) -> bool:
-    """A form the batch can take (serial, cell and exterior-facet integrals, no dof transformations)."""
+def load_modules(comm):
+    """The batch's compiled C modules (collective the first time in a process: rank 0 compiles)."""
+    cbuild.load("rodfem_fastasm", C_SOURCE, C_DECL, comm)
+    cbuild.load("rodfem_segments", COPY_SOURCE, COPY_DECL, comm)
+
+
+def batchable(form, spread=False) -> bool:
+    """A form the batch can take (serial, cell and exterior-facet integrals, no dof transformations).
+    `spread`: also a body spread over ranks, one rank's cells with X its Function's local array (owned dofs
+    and ghosts: rodfem/fem/assembly.py's BodyBlock)."""
     from dolfinx.fem import IntegralType
-    if form is None or form.mesh.comm.size != 1:
+    if form is None or (form.mesh.comm.size != 1 and not spread):
         return False
     spaces = list(form.function_spaces) + [c.function_space for c in compat.cpp_form(form).coefficients]
     return (set(form.integral_types) <= {IntegralType.cell, IntegralType.exterior_facet}
@@ -123,12 +133,13 @@ class FormBatch:
             g = f.mesh.geometry
             xs.append(np.asarray(g.x, dtype=np.float64))
             cell_nodes = compat.geometry_dofmap(f.mesh)
-            self.nx = int(cell_nodes.shape[1])
+            self.nx = max(self.nx, int(cell_nodes.shape[1])) if xdofs else int(cell_nodes.shape[1])
             xdofs.append(np.asarray(cell_nodes, dtype=np.int64).reshape(-1) + nodes)
             nodes += len(g.x)
         self.x = np.ascontiguousarray(np.concatenate(xs))
         self.xdofs = np.ascontiguousarray(np.concatenate(xdofs), dtype=np.int32)
-        ncells = [len(x) // self.nx for x in xdofs]
+        # (a rank of a body spread over ranks may hold none of its cells: no nodes per cell seen there)
+        ncells = [len(x) // self.nx if self.nx else 0 for x in xdofs]
         self.cell_start = np.concatenate([[0], np.cumsum(ncells)]).astype(np.int64)
         # the argument's dofs: rows of X
         if self.rank:
@@ -205,8 +216,9 @@ class FormBatch:
         for b, f in enumerate(self.forms):
             packed = compat.pack_coefficients(f)
             for it in self.integrals:
-                mine = it["coeffs"][:it["n"] * it["cstride"]].reshape(it["n"], -1)[it["body"] == b]
-                theirs = np.asarray(packed[it["key"]]).reshape(len(mine), -1)
+                mine = it["coeffs"][:it["n"] * it["cstride"]].reshape(it["n"], it["cstride"])[it["body"] == b]
+                theirs = np.asarray(packed[it["key"]]).reshape(len(mine), it["cstride"])   # (a rank of a spread
+                # body may have no entity of an integral: none of the boundary's facets)
                 if mine.shape != theirs.shape or not np.array_equal(mine, theirs):
                     raise ValueError("the batch's coefficients differ from DOLFINx's packing")
 
@@ -342,7 +354,7 @@ class BlockBatch:
             for bc in blk.bcs:
                 dofs = np.asarray(bc.dof_indices()[0], dtype=np.int64)
                 rows.append(blk.lo + dofs)
-                self._g.append((np.asarray((bc.g if hasattr(bc, "g") else bc.value).x.array), dofs))
+                self._g.append((np.asarray(compat.dirichlet_values(bc)), dofs))
         self.bc_rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
         self.bc = np.zeros(self.size, np.int8)
         self.bc[self.bc_rows] = 1

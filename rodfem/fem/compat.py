@@ -260,6 +260,11 @@ def expression_twin(expression, swap, mesh):
     return twin
 
 
+def dirichlet_values(bc):
+    """The array of a DirichletBC's values Function, local and with ghosts (`bc.value` in 0.5, `bc.g` later)."""
+    return (bc.g if hasattr(bc, "g") else bc.value).x.array
+
+
 def create_vector(compiled_form):
     from dolfinx.fem import petsc
     first = next(iter(inspect.signature(petsc.create_vector).parameters))

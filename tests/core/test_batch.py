@@ -156,3 +156,47 @@ def test_segments_copy_whichever_array_they_are_given():
     parts[0][:] = -1.0
     seg.get(y)
     assert np.array_equal(x, b) and np.array_equal(y, [-1, -1, -1, 13, 14])
+
+
+SPREAD = """
+import json
+import numpy as np
+from mpi4py import MPI
+from rodfem.app.scene import load
+out = {}
+for name, n in (("flying-spaghetti-2d", 40), ("cantilever-2d", 40), ("flying-spaghetti-3d", 12)):
+    scene = load(name)
+    s = scene.build(scene.values({"n_elements": n}), MPI.COMM_WORLD)
+    s.build()
+    blk = s.newton.assembler.blocks[0]
+    rng = np.random.default_rng(MPI.COMM_WORLD.rank)
+    X = s.newton.assembler.vector
+    for k, shift in enumerate((0.0, 1e-3)):   # the state, then one off its Dirichlet values (the lifting)
+        X.getArray()[:] += shift * rng.standard_normal(X.getLocalSize())
+        blk.set_state(X.getArray(readonly=True))
+        fast, slow = np.zeros(blk.hi - blk.lo), np.zeros(blk.hi - blk.lo)
+        blk.residual(fast)
+        kernels, blk.kernels = blk.kernels, None
+        blk.residual(slow)
+        blk.kernels = kernels
+        worst = MPI.COMM_WORLD.allreduce(float(np.max(np.abs(fast - slow), initial=0.0)), op=MPI.MAX)
+        size = MPI.COMM_WORLD.allreduce(float(np.max(np.abs(slow), initial=0.0)), op=MPI.MAX)
+        spread = MPI.COMM_WORLD.allreduce(kernels is not None, op=MPI.LAND)
+        out[f"{name} {k}"] = [worst, size, spread, bool(blk.bcs)]
+if MPI.COMM_WORLD.rank == 0:
+    print(json.dumps(out))
+"""
+
+
+@pytest.mark.mpi
+def test_a_body_spread_over_ranks_has_the_residual_of_dolfinx():
+    """On two ranks a body spread over both has its residual made by the batched kernel loop on each
+    rank's cells (no packing of coefficients): it equals DOLFINx's assembly, bit for bit, for a free beam
+    whose tip load lives on one rank only, a clamped beam (Dirichlet rows) at its state and at a state off
+    its conditions (DOLFINx's lifting then), and the 3D rod."""
+    from processes import script_on_ranks
+    (row,) = script_on_ranks(SPREAD, ranks=(2,))
+    for key, (worst, size, spread, bcs) in row.items():
+        assert spread and size > 0 and worst == 0.0, (key, worst, size)
+    assert row["cantilever-2d 1"][3] and not row["flying-spaghetti-2d 0"][3]
+
