@@ -46,7 +46,7 @@ class StateSpace:
         self.index = {f.name: i for i, f in enumerate(self.fields)}
         els = [compat.element(f.family, mesh, f.degree, f.shape) for f in self.fields]
         self.V = compat.functionspace(mesh, compat.mixed_element(els))
-        self._collapsed, self._scratch = {}, {}
+        self._collapsed, self._scratch, self._nodes = {}, {}, {}
 
     @property
     def names(self):
@@ -137,10 +137,12 @@ class StateSpace:
 
     def nodal(self, u, name):
         """Owned nodal values of component `name`: (s, values[npoints, size]), sorted by s."""
-        Vi, dofs = self.collapse(name)
-        bs = Vi.dofmap.index_map_bs
-        nloc = Vi.dofmap.index_map.size_local
-        s = Vi.tabulate_dof_coordinates()[:nloc, 0]
-        vals = u.x.array[dofs].reshape(-1, bs)[:nloc]
-        order = np.argsort(s)
-        return s[order], vals[order]
+        if name not in self._nodes:   # (the nodes' s and where their values sit in u: once per field)
+            Vi, dofs = self.collapse(name)
+            bs = Vi.dofmap.index_map_bs
+            nloc = Vi.dofmap.index_map.size_local
+            s = Vi.tabulate_dof_coordinates()[:nloc, 0]
+            order = np.argsort(s)
+            self._nodes[name] = (s[order], np.asarray(dofs).reshape(-1, bs)[:nloc][order])
+        s, at = self._nodes[name]
+        return s.copy(), u.x.array[at]

@@ -114,7 +114,7 @@ class BodyView:
             ncells = body.mesh.topology.index_map(body.mesh.topology.dim).size_local
             cells = compat.eval_expression(expr, body.mesh, np.arange(ncells, dtype=np.int32))
             cells = cells.reshape(ncells, 2 * self.degree + 1, -1)
-        gathered = body.comm.gather((local, cells), root=0) if body.comm.size > 1 else [(local, cells)]
+        gathered = _gathered(body.comm, local, cells) if body.comm.size > 1 else [(local, cells)]
         if body.comm.rank != 0:
             return None
         pos_name = self.model.position
@@ -140,6 +140,33 @@ class BodyView:
         return {"dim": self.dim, "degree": self.degree, "omitted": self.omitted, "nodal": self.nodal,
                 "rates": self.rates, "velocity": self.velocity, "has_frame": self.has_frame, "kind": self.kind,
                 "outputs": self.output_names()}
+
+
+def _gathered(comm, local, cells):
+    """[(local, cells)] of every rank on rank 0 (None elsewhere): `local` {name: (s, values)}, `cells` an array
+    or None, the same names and trailing shapes on every rank.  Their arrays travel as one float buffer (MPI
+    Gatherv; a pickled gather of a frame of 10^5 elements took 7 ms on rank 0), their shapes pickled."""
+    arrays = [a for s, values in local.values() for a in (s, values)] + ([] if cells is None else [cells])
+    arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in arrays]
+    flat = np.concatenate([a.ravel() for a in arrays]) if arrays else np.zeros(0)
+    shapes = comm.gather([a.shape for a in arrays], root=0)
+    counts = comm.gather(flat.size, root=0)
+    recv = np.empty(sum(counts)) if comm.rank == 0 else None
+    comm.Gatherv(flat, (recv, counts) if comm.rank == 0 else None, root=0)
+    if comm.rank != 0:
+        return None
+    out, start = [], 0
+    for rank_shapes, count in zip(shapes, counts):
+        parts, at = [], start
+        for shape in rank_shapes:
+            size = int(np.prod(shape))
+            parts.append(recv[at:at + size].reshape(shape))
+            at += size
+        start += count
+        names = list(local)
+        out.append(({n: (parts[2 * k], parts[2 * k + 1]) for k, n in enumerate(names)},
+                    None if cells is None else parts[-1]))
+    return out
 
 
 class PlacedView(BodyView):
