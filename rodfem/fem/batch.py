@@ -128,12 +128,12 @@ class FormBatch:
         ffi = self.mod.ffi
         self.rank = len(first.function_spaces)
         # geometry: the bodies' nodes one after the other
-        xs, xdofs, nodes = [], [], 0
+        xs, xdofs, nodes, self.nx = [], [], 0, 0
         for f in self.forms:
             g = f.mesh.geometry
             xs.append(np.asarray(g.x, dtype=np.float64))
             cell_nodes = compat.geometry_dofmap(f.mesh)
-            self.nx = max(self.nx, int(cell_nodes.shape[1])) if xdofs else int(cell_nodes.shape[1])
+            self.nx = max(self.nx, int(cell_nodes.shape[1]))   # (a rank without cells: 0 columns)
             xdofs.append(np.asarray(cell_nodes, dtype=np.int64).reshape(-1) + nodes)
             nodes += len(g.x)
         self.x = np.ascontiguousarray(np.concatenate(xs))
