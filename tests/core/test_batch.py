@@ -191,12 +191,16 @@ if MPI.COMM_WORLD.rank == 0:
 @pytest.mark.mpi
 def test_a_body_spread_over_ranks_has_the_residual_of_dolfinx():
     """On two ranks a body spread over both has its residual made by the batched kernel loop on each
-    rank's cells (no packing of coefficients): it equals DOLFINx's assembly, bit for bit, for a free beam
-    whose tip load lives on one rank only, a clamped beam (Dirichlet rows) at its state and at a state off
-    its conditions (DOLFINx's lifting then), and the 3D rod."""
+    rank's cells (no packing of coefficients) when its gather equals DOLFINx's packing on every rank; the
+    residual equals DOLFINx's assembly, bit for bit, for a free beam whose tip load lives on one rank only,
+    a clamped beam (Dirichlet rows) at its state and at a state off its conditions (DOLFINx's lifting then),
+    and the 3D rod, which takes the batched loop.  (On DOLFINx 0.9 the planar beams' tip facet is packed
+    otherwise on the rank that holds it: the check refuses the batch there, and both ranks keep DOLFINx's
+    assembly; on 0.5 they take the batched loop too.)"""
     from processes import script_on_ranks
     (row,) = script_on_ranks(SPREAD, ranks=(2,))
     for key, (worst, size, spread, bcs) in row.items():
-        assert spread and size > 0 and worst == 0.0, (key, worst, size)
+        assert size > 0 and worst == 0.0, (key, worst, size)
+    assert row["flying-spaghetti-3d 0"][2] and row["flying-spaghetti-3d 1"][2]
     assert row["cantilever-2d 1"][3] and not row["flying-spaghetti-2d 0"][3]
 
