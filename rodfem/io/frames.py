@@ -70,18 +70,20 @@ def active(point_data, velocity):
     return {"Normals": "d2", "Vectors": velocity, "Scalars": SPEED if SPEED in point_data else "s"}
 
 
-def centreline(state, labels, velocity=None):
-    """The centreline PolyData of a BodyState (`velocity`: the name of its velocity field, if written)."""
+def centreline(state, labels, velocity=None, lead=0, total=None):
+    """The centreline PolyData of a BodyState (`velocity`: the name of its velocity field, if written).
+    Of some of the nodes of a body (snapshot.rows_of): its point rows, `lead` the place of its first node
+    among the nodes of its cells, `total` the body's number of nodes (its polyline's)."""
     n = len(state.position)
     poly = PolyData(points=state.position)
     if state.kind in ("rod", "line"):
-        poly.lines = [np.arange(n)]
+        poly.lines = [np.arange(total or n)]
     else:
         poly.verts = [np.arange(n)]
     poly.point_data = point_arrays(state, labels, velocity=velocity)
     for name, vals in state.cells.items():
         if name != "s":
-            poly.point_data[name] = _array(labels, name, at_nodes(vals, state.degree))
+            poly.point_data[name] = _array(labels, name, at_nodes(vals, state.degree)[lead:lead + n])
     poly.active["PointData"] = active(poly.point_data, velocity)
     return poly
 

@@ -239,6 +239,19 @@ def by_name(cells, names):
     return out
 
 
+def rows_of(state, a, b):
+    """(part, lead): the nodes a, ..., b - 1 of a flexible body's BodyState and the cells their derived
+    fields need (one more on each side: at a node between cells the mean of both), `lead` the place
+    of node a among the nodes of those cells (frames.centreline(part, lead=lead))."""
+    k, ncells = state.degree, len(state.cells["s"])
+    ca, cb = max(a // k - 1, 0), min(ncells, (b - 1) // k + 2)
+    part = BodyState(state.name, state.kind, state.dim, state.s[a:b], state.position[a:b],
+                     {n: v[a:b] for n, v in state.fields.items()},
+                     None if state.directors is None else state.directors[a:b],
+                     {n: v[ca:cb] for n, v in state.cells.items()}, k)
+    return part, a - ca * k
+
+
 def at_nodes(values, degree):
     """Cell values (cells, 2k + 1, size) at the P_k nodes of the body (cells k + 1, size): exact inside a
     cell; at a node shared by two cells the mean of the two cells' values (a field that jumps there)."""

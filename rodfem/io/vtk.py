@@ -14,6 +14,7 @@ file) holds numbers, e.g. TimeValue (the frame's time: a series of .vtp files op
 The bytes depend on the values only: the same state gives the same file on any number of ranks.
 """
 import base64
+import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from xml.sax.saxutils import quoteattr
@@ -61,9 +62,19 @@ def _strings(name, strings, indent=6):
             + b"</DataArray>\n")
 
 
-def _array(name, arr, components=(), indent=8, tuples=False, appended=None):
+@dataclass
+class Block:
+    """One array of a file's appended data: `data` the bytes at hand (a file written in rows: this rank's
+    rows), `size` the array's whole byte count, `row` the bytes of one of its rows (0: not written in rows)."""
+    data: memoryview
+    size: int
+    row: int = 0
+
+
+def _array(name, arr, components=(), indent=8, tuples=False, appended=None, rows=None):
     """The bytes of one DataArray element (`tuples`: with NumberOfTuples, as field data needs); `appended`
-    (a list of the file's appended blocks): its values appended there, the element giving their offset."""
+    (a list of the file's appended Blocks): its values appended there, the element giving their offset
+    (`rows`: the array's whole number of rows, of which `arr` holds some)."""
     values = np.asarray(arr)
     if values.dtype.kind == "f":
         values = values.astype(np.float64, copy=False)
@@ -73,7 +84,7 @@ def _array(name, arr, components=(), indent=8, tuples=False, appended=None):
     attrs = {"type": _TYPES[values.dtype], "NumberOfComponents": str(ncomp),
              "format": "binary" if appended is None else "appended"}
     if appended is not None:
-        attrs["offset"] = str(sum(len(b) for b in appended))
+        attrs["offset"] = str(sum(8 + b.size for b in appended))
     if name:
         attrs["Name"] = name
     if tuples:
@@ -84,7 +95,8 @@ def _array(name, arr, components=(), indent=8, tuples=False, appended=None):
     if appended is None:
         return b" " * indent + f"<DataArray {head}>".encode() + _encode(values) + b"</DataArray>\n"
     data = memoryview(np.ascontiguousarray(values).astype(values.dtype.newbyteorder("<"), copy=False)).cast("B")
-    appended += [np.uint64(len(data)).tobytes(), data]
+    row = values.dtype.itemsize * ncomp
+    appended.append(Block(data, row * rows if rows is not None else len(data), row if rows is not None else 0))
     return b" " * indent + f"<DataArray {head}/>\n".encode()
 
 
@@ -126,8 +138,11 @@ def piece(poly, k, index="body"):
                                 for name, a in poly.point_data.items() if name != index})
 
 
-def write_vtp(path, poly):
-    """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
+def _layout(poly, total=None):
+    """(head, blocks, tail) of the file of `poly`: the bytes before the appended data, its appended arrays
+    (Blocks, in order) and the bytes after them.  `total`: the whole file's number of points, of which
+    poly holds the point rows (points and point data; its cells are the whole file's, its cell data none)."""
+    rows = total if total is not None else len(poly.points)
     parts = [b'<?xml version="1.0" encoding="utf-8"?>\n'
              b'<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
              b"  <PolyData>\n"]
@@ -138,24 +153,64 @@ def write_vtp(path, poly):
                   for name, v in poly.field_data.items()]
         parts.append(b"    </FieldData>\n")
     appended = []   # the Piece's arrays, in the order of their elements
-    parts += [f'    <Piece NumberOfPoints="{len(poly.points)}" NumberOfVerts="{len(poly.verts)}" '
-             f'NumberOfLines="{len(poly.lines)}" NumberOfStrips="0" NumberOfPolys="{len(poly.polys)}">\n'.encode()]
+    parts += [f'    <Piece NumberOfPoints="{rows}" NumberOfVerts="{len(poly.verts)}" '
+              f'NumberOfLines="{len(poly.lines)}" NumberOfStrips="0" NumberOfPolys="{len(poly.polys)}">\n'.encode()]
     for tag, data in (("PointData", poly.point_data), ("CellData", poly.cell_data)):
         active = "".join(f" {k}={quoteattr(v)}" for k, v in poly.active.get(tag, {}).items() if v in data)
         parts.append(f"      <{tag}{active}>\n".encode())
-        parts += [_array(name, a.values, a.components, appended=appended) for name, a in data.items()]
+        parts += [_array(name, a.values, a.components, appended=appended, rows=rows if tag == "PointData" else None)
+                  for name, a in data.items()]
         parts.append(f"      </{tag}>\n".encode())
     parts += [b"      <Points>\n",
-              _array("", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3), appended=appended),
+              _array("", np.asarray(poly.points, dtype=np.float64).reshape(-1, 3), appended=appended, rows=rows),
               b"      </Points>\n"]
     parts += [_cells(tag, cells, appended) for tag, cells in (("Verts", poly.verts), ("Lines", poly.lines),
                                                               ("Strips", []), ("Polys", poly.polys))]
     parts.append(b'    </Piece>\n  </PolyData>\n  <AppendedData encoding="raw">\n   _')
+    return b"".join(parts), appended, b"\n  </AppendedData>\n</VTKFile>\n"
+
+
+def write_vtp(path, poly):
+    """Write `poly` (a PolyData) to `path` as a VTK XML PolyData file."""
+    head, blocks, tail = _layout(poly)
     with open(path, "wb") as f:
-        f.write(b"".join(parts))
-        for block in appended:   # (the arrays' own memory: no copy of the whole file)
-            f.write(block)
-        f.write(b"\n  </AppendedData>\n</VTKFile>\n")
+        f.write(head)
+        for block in blocks:   # (the arrays' own memory: no copy of the whole file)
+            f.write(np.uint64(block.size).tobytes())
+            f.write(block.data)
+        f.write(tail)
+
+
+def _pwrite(fd, data, at):
+    data = memoryview(data).cast("B")
+    while len(data):
+        n = os.pwrite(fd, data, at)
+        data, at = data[n:], at + n
+
+
+def write_vtp_rows(path, poly, first, total, create):
+    """Write the point rows first, first + 1, ... of a file of `total` points, held by `poly` (its points and
+    point data; every writer's poly has the same arrays, field data and cells).  `create` (one writer, before
+    the others): the file, sized to its whole length, its text, byte counts and cells; then each writer
+    (the creator too) its rows, at their places.  The writers together write the bytes `write_vtp` writes."""
+    head, blocks, tail = _layout(poly, total)
+    fd = os.open(path, os.O_WRONLY | (os.O_CREAT | os.O_TRUNC if create else 0), 0o644)
+    try:
+        at = len(head)
+        if create:
+            _pwrite(fd, head, 0)
+        for block in blocks:
+            if create:
+                _pwrite(fd, np.uint64(block.size).tobytes(), at)
+                if not block.row:
+                    _pwrite(fd, block.data, at + 8)
+            elif block.row:
+                _pwrite(fd, block.data, at + 8 + first * block.row)
+            at += 8 + block.size
+        if create:
+            _pwrite(fd, tail, at)
+    finally:
+        os.close(fd)
 
 
 def write_pvd(path, datasets):

@@ -293,6 +293,80 @@ def test_two_ranks_write_the_serial_bytes(tmp_path):
     assert gif_frames(tmp_path / "p" / "animation.gif") == 3
 
 
+def test_a_centreline_written_in_rows_has_the_bytes_of_the_whole(tmp_path):
+    """A body's centreline file written in rows (as the ranks of a spread body write it: `rows_of`, each
+    part's rows by `write_vtp_rows`, the creator first, the others in any order) has the bytes of the file
+    written whole, for a P1 planar beam and a P2 rod (derived fields at the nodes between cells: the
+    mean of two cells', cut between parts too), cut at a cell's end, inside a cell and next to the ends."""
+    from scenes import built
+
+    from rodfem.io.frames import centreline
+    from rodfem.io.snapshot import body_views, rows_of
+    from rodfem.io.vtk import write_vtp, write_vtp_rows
+    for scene_name, n in (("flying-spaghetti-2d", 12), ("flying-spaghetti-3d", 6)):
+        problem = built(scene_name, n)
+        (view,), gather = body_views(problem)
+        state = gather()[0]
+        total = len(state.position)
+        whole = centreline(state, view.labels, view.velocity)
+        write_vtp(tmp_path / "whole.vtp", whole)
+        for cuts in ([0, total // 2, total], [0, 1, 2, 7, total - 1, total], [0, 5, 6, total]):
+            parts = [rows_of(state, a, b) + (a,) for a, b in zip(cuts[:-1], cuts[1:])]
+            polys = [centreline(part, view.labels, view.velocity, lead, total) for part, lead, _ in parts]
+            for poly in polys:
+                assert list(poly.point_data) == list(whole.point_data)
+            path = tmp_path / "rows.vtp"
+            write_vtp_rows(path, polys[0], 0, total, create=True)
+            for poly, (_, _, first) in reversed(list(zip(polys, parts))):
+                write_vtp_rows(path, poly, first, total, create=False)
+            assert path.read_bytes() == (tmp_path / "whole.vtp").read_bytes(), (scene_name, cuts)
+
+
+@pytest.mark.mpi
+def test_two_ranks_write_each_their_rows_of_a_long_centreline(tmp_path):
+    """A frame of a body spread over two ranks with at least ROWS nodes per rank: each rank writes its rows of
+    the centreline file (rank 0 creates it first), the file has the bytes one rank writes (the serial
+    run's: the same initial state) and no temporary file is left; a short body's frame rank 0 writes whole."""
+    from processes import script_on_ranks
+    script = f"""
+import hashlib, json, os
+from mpi4py import MPI
+from rodfem.app.scene import load
+from rodfem.io import output
+comm = MPI.COMM_WORLD
+calls = []
+write_rows = output.write_vtp_rows
+def counted(path, poly, first, total, create):
+    calls.append([int(first), len(poly.points), create])
+    write_rows(path, poly, first, total, create)
+output.write_vtp_rows = counted
+rows = {{}}
+for name, n in (("flying-spaghetti-2d", 10000), ("flying-spaghetti-3d", 5000), ("flying-spaghetti-2d", 50)):
+    scene = load(name)
+    problem = scene.build(scene.values({{"n_elements": n}}), comm)
+    out = output.OutDir({str(tmp_path)!r} + f"/{{name}}-{{n}}-np{{comm.size}}", comm)
+    with out.claimed({{}}):
+        writer = output.RunWriter(out, problem, 1, 2)
+        calls.clear()
+        writer.frame(0.0)
+        data = open(out.file("centreline/frame_00000.vtp"), "rb").read() if comm.rank == 0 else b""
+        rows[f"{{name}}-{{n}}"] = {{"calls": comm.allgather(list(calls)), "sha": hashlib.sha256(data).hexdigest(),
+                                "left": sorted(f for f in os.listdir(out.file("centreline")) if f.startswith("."))}}
+if comm.rank == 0:
+    print(json.dumps(rows))
+"""
+    serial, parallel = script_on_ranks(script, timeout=600)
+    for case, nodes in (("flying-spaghetti-2d-10000", 10001), ("flying-spaghetti-3d-5000", 10001)):
+        assert parallel[case]["sha"] == serial[case]["sha"], case
+        assert serial[case]["calls"] == [[]]
+        half = nodes // 2
+        assert parallel[case]["calls"] == [[[0, half, True], [0, half, False]], [[half, nodes - half, False]]], case
+        assert parallel[case]["left"] == []
+    short = "flying-spaghetti-2d-50"
+    assert parallel[short]["sha"] == serial[short]["sha"]
+    assert parallel[short]["calls"] == [[], []]
+
+
 def test_a_full_disk_leaves_whole_rows_in_the_history(tmp_path):
     """Files limited to 12 kB (as on a full disk: history.csv reaches it first): the run ends with
     one line (exit 2), and history.csv holds whole rows only, each with every column (the row that
