@@ -31,6 +31,10 @@ decimal of 12 significant digits (`clean_time`: 2.4, not n dt = 2.40000000000000
 units of its arrays (field data `units`, "name [unit]"; also in fields.json).  The
 section's width is the scene's `section` (0: a 25th of the longest body).  The frames are
 computed from the state gathered on rank 0 (rodfem/io/snapshot.py): the same on any number of ranks.
+A long body spread over ranks (one flexible body, at least ROWS nodes per rank) has its centreline
+file written by every rank: rank 0 sends each rank a block of the gathered nodes (`_rows`), creates
+the file (its text, byte counts and polyline), every rank writes its rows at their places
+(vtk.write_vtp_rows: the bytes one writer writes) and rank 0 renames it and writes the rest.
 
 A run owns its directory (`OutDir`): a lock (``fcntl.flock`` on .rodfem.lock)
 refuses a second run into it while the first is running, and a new run first
