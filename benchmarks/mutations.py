@@ -261,6 +261,12 @@ MUTATIONS = [
       [("w[uj[t]] -= l * ua[t];", "w[uj[t]] += l * ua[t];")],
       ["tests/la/test_scaling.py::test_partial_lu_leaves_the_schur_complement"],
       "the partial LU's elimination adds the update instead of subtracting it"),
+    M("spread-functionals-without-ghost-values", "rodfem/fem/batch.py",
+      [("            out[b] = float(batch.scalars(x.x.array)[0])",
+        "            own = x.function_space.dofmap.index_map.size_local * x.function_space.dofmap.index_map_bs\n"
+        "            out[b] = float(batch.scalars(np.where(np.arange(len(x.x.array)) < own, x.x.array, 0.0))[0])")],
+      ["tests/core/test_batch.py::test_a_body_spread_over_ranks_has_the_residual_of_dolfinx"],
+      "a spread body's functionals read its ghost dofs as zero (the cells at the ranks' border wrong)"),
     M("partial-structure-interface-values-from-the-diagonal-block", "rodfem/la/schur.py",
       [("            src = np.insert(src, ends, nD + np.flatnonzero(okeep))",
         "            src = np.insert(src, ends, np.flatnonzero(okeep))")],

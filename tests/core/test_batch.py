@@ -183,6 +183,17 @@ for name, n in (("flying-spaghetti-2d", 40), ("cantilever-2d", 40), ("flying-spa
         size = MPI.COMM_WORLD.allreduce(float(np.max(np.abs(slow), initial=0.0)), op=MPI.MAX)
         spread = MPI.COMM_WORLD.allreduce(kernels is not None, op=MPI.LAND)
         out[f"{name} {k}"] = [worst, size, spread, bool(blk.bcs)]
+    # the functionals of the history (H, supplied work, the columns): this rank's part of each sum
+    from dolfinx import fem
+    gaps, batched = [], []
+    for key in ["H", "work"] + s.columns:
+        f = s._functionals(key)
+        mine = f.values(None)
+        theirs = [fem.assemble_scalar(f.forms[b]) for b in f.order]
+        gaps.append(max(abs(a - b) for a, b in zip(mine, theirs)))
+        batched.append(bool(f.spread))
+    out[f"{name} functionals"] = [MPI.COMM_WORLD.allreduce(max(gaps), op=MPI.MAX), len(gaps),
+                                  MPI.COMM_WORLD.allreduce(all(batched), op=MPI.LAND)]
 if MPI.COMM_WORLD.rank == 0:
     print(json.dumps(out))
 """
@@ -194,13 +205,18 @@ def test_a_body_spread_over_ranks_has_the_residual_of_dolfinx():
     rank's cells (no packing of coefficients) when its gather equals DOLFINx's packing on every rank; the
     residual equals DOLFINx's assembly, bit for bit, for a free beam whose tip load lives on one rank only,
     a clamped beam (Dirichlet rows) at its state and at a state off its conditions (DOLFINx's lifting then),
-    and the 3D rod, which takes the batched loop.  (On DOLFINx 0.9 the planar beams' tip facet is packed
-    otherwise on the rank that holds it: the check refuses the batch there, and both ranks keep DOLFINx's
-    assembly; on 0.5 they take the batched loop too.)"""
+    and the 3D rod, which takes the batched loop; so do the functionals of the history (H, the supplied
+    work, the columns: each rank's part of their sums, bit for bit DOLFINx's).  (On DOLFINx 0.9 the planar
+    beams' tip facet is packed otherwise on the rank that holds it: the check refuses the batch there, and
+    both ranks keep DOLFINx's assembly; on 0.5 they take the batched loop too.)"""
     from processes import script_on_ranks
     (row,) = script_on_ranks(SPREAD, ranks=(2,))
-    for key, (worst, size, spread, bcs) in row.items():
-        assert size > 0 and worst == 0.0, (key, worst, size)
+    for key, (worst, size, *_) in row.items():
+        if key.endswith("functionals"):   # (H, work and the columns: each rank's part of the sum, bit for bit)
+            assert size >= 4 and worst == 0.0, (key, worst, size)
+        else:
+            assert size > 0 and worst == 0.0, (key, worst, size)
+    assert row["flying-spaghetti-3d functionals"][2]
     assert row["flying-spaghetti-3d 0"][2] and row["flying-spaghetti-3d 1"][2]
     assert row["cantilever-2d 1"][3] and not row["flying-spaghetti-2d 0"][3]
 
