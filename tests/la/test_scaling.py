@@ -135,6 +135,43 @@ def test_the_interior_graph_is_the_pattern_of_k_plus_its_transpose():
         assert np.array_equal(got.indptr, want.indptr) and np.array_equal(got.indices, want.indices)
 
 
+def test_a_subgraph_is_scipys_rows_and_columns_of_the_graph():
+    """subgraph (C) against scipy's graph[keep][:, keep]: the same pattern, rows sorted, renumbered, for
+    kept sets that leave out rows at the ends, in the middle, none and all but one."""
+    import scipy.sparse as sp
+
+    from rodfem.la.partial_lu import interior_graph, subgraph
+    rng = np.random.default_rng(5)
+    for seed in range(6):
+        n = 90
+        K = sp.csr_matrix(sp.random(n, n, density=0.05, random_state=seed) + sp.eye(n))
+        graph = interior_graph(K.indptr, K.indices, n)
+        for keep in (np.flatnonzero(rng.random(n) < 0.8), np.arange(n), np.arange(5, n - 3), np.array([7])):
+            want = graph[keep][:, keep].tocsr()
+            want.sort_indices()
+            got = subgraph(graph, keep)
+            assert got.shape == want.shape
+            assert np.array_equal(got.indptr, want.indptr) and np.array_equal(got.indices, want.indices)
+
+
+def test_the_dofs_next_to_the_interface_are_ordered_last():
+    """interior_orders puts the interior dofs that couple to the interface G after the others, just before G:
+    a chain of 10 interior dofs whose last couples to G's first by its own row, and whose first only through
+    an interface row's entry (K_G0, not K_0G)."""
+    import scipy.sparse as sp
+
+    from rodfem.la.partial_lu import interior_orders
+    n, nI = 12, 10
+    K = sp.diags([np.ones(n - 1), np.ones(n), np.ones(n - 1)], [-1, 0, 1], format="lil")
+    K[10, 9] = 0.0   # (G's rows couple to dof 9 only through dof 9's row...)
+    K[11, 0] = 1.0   # (...and to dof 0 through an interface row's entry)
+    K = sp.csr_matrix(K)
+    K.eliminate_zeros()
+    for tries in ((("rcm", False),), (("amd", False),), (("rcm", True),)):
+        (order,) = interior_orders(K.indptr, K.indices, nI, n - nI, tries)
+        assert sorted(order[nI - 2:nI]) == [0, 9] and list(order[nI:]) == [10, 11], (tries, order)
+
+
 def test_partial_lu_tries_end_at_the_pattern_of_the_matrix(monkeypatch):
     """"rcm" tries RCM, AMD and RCM turned round and keeps the least fill; since no order's factor has fewer
     entries than K and its diagonal, an order within NO_BETTER of that ends the tries.  A tridiagonal
