@@ -182,16 +182,9 @@ class BodyBlock:
         a form the loop cannot take: DOLFINx's assembly).  At 10^5 planar elements on two ranks: a residual
         12.4 -> 9.0 ms per rank, DOLFINx's packing alone 2.3 ms of it."""
         from rodfem.fem import batch
-        comm = self.x.function_space.mesh.comm
-        if comm.size == 1 or self.fast is None or not batch.batchable(self.F, spread=True):
+        if self.x.function_space.mesh.comm.size == 1 or self.fast is None:
             return None
-        batch.load_modules(comm)   # (collective: the batch's construction is then local to each rank)
-        try:
-            kernels = batch.FormBatch([self.F], [self.x], [0], len(self.x.x.array))
-        except Exception:   # (coefficients it cannot gather: ValueError; whatever else, DOLFINx's path on every
-            kernels = None   # rank, not one rank raising while the others wait)
-        # one path on every rank (a rank without cells, a point mass's other rank, makes its batch too)
-        return kernels if comm.allreduce(kernels is not None, op=MPI.LAND) else None
+        return batch.spread_batch(self.F, self.x)
 
     def place(self, layout, i):
         self.layout, self.i = layout, i

@@ -77,9 +77,14 @@ LOCK_FILE = ".rodfem.lock"
 ROWS = 5000
 
 
+def temporary(path):
+    """The hidden temporary file beside `path` that becomes `path` when whole (OWN_FILES' ".*.tmp")."""
+    return os.path.join(os.path.dirname(path), "." + os.path.basename(path) + ".tmp")
+
+
 def replace_atomically(path, write):
     """Create `path` by write(temporary path) in the same directory, then os.replace (never half-written)."""
-    tmp = os.path.join(os.path.dirname(path), "." + os.path.basename(path) + ".tmp")
+    tmp = temporary(path)
     try:
         write(tmp)
         os.replace(tmp, path)
@@ -346,8 +351,7 @@ class RunWriter:
         part, lead, first, total, k = rows
         view = self.views[0]
         poly = self._with_fields(centreline(part, view.labels, view.velocity, lead, total), t, [0])
-        name = self.out.file(self.file_name("centreline", k, self.parts[0]))
-        tmp = os.path.join(os.path.dirname(name), "." + os.path.basename(name) + ".tmp")
+        tmp = temporary(self.out.file(self.file_name("centreline", k, self.parts[0])))
         try:
             self.out.do("write a frame", write_vtp_rows, tmp, poly, first, total, True)
             self.out.do_each([("write a frame", write_vtp_rows, tmp, poly, first, total, False)], every=True)
